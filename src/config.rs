@@ -1,0 +1,179 @@
+//! Detector parameters (SPEC sections 1-11), their defaults, TOML I/O and validation.
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// How the L-FAST test of SPEC 8 forms the points `t_i` on the circle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// The paper's steps literally: every edge pixel on the circle is a `t_i`.
+    Paper,
+    /// Runs of consecutive edge pixels on the circle are one branch each.
+    Branch,
+}
+
+impl std::str::FromStr for Mode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "paper" => Ok(Mode::Paper),
+            "branch" => Ok(Mode::Branch),
+            _ => Err(format!("unknown mode `{s}` (expected paper or branch)")),
+        }
+    }
+}
+
+/// Every parameter of the pipeline. Build with `Config::default()` and struct
+/// update syntax, or read a TOML file with [`Config::load`]; [`Config::validate`]
+/// names the first bad field.
+///
+/// ```
+/// let cfg = lfast::Config { n_features: 1000, ..Default::default() };
+/// assert!(cfg.validate().is_ok());
+/// let bad = lfast::Config { scale_factor: 1.0, ..Default::default() };
+/// assert!(bad.validate().unwrap_err().to_string().contains("scale_factor"));
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Config {
+    /// Noise factor of the flagged median (SPEC 1), > 0; used as a rational
+    /// with denominator [`DELTA_DEN`].
+    pub delta: f64,
+    /// Local-threshold spread alpha in hundredths (SPEC 5), 0..=99.
+    pub alpha_pct: u32,
+    /// L-FAST variant (SPEC 8).
+    pub mode: Mode,
+    /// Neighbours of a non-edge `q_i` that must be edge for it to support p, 1..=8.
+    pub support: u32,
+    /// Branch mode: two supporting branches closer than `8 - straight_tol` steps
+    /// to opposite are a straight line, 0..=7.
+    pub straight_tol: u32,
+    /// Corners are tested only this far (pixels) from every side, at every level, >= 7.
+    pub border: u32,
+    /// Corner NMS half-window r, (2r+1)^2 square, 0..=32.
+    pub nms_radius: u32,
+    /// Pyramid levels, 1 = no pyramid, 1..=32.
+    pub n_levels: u32,
+    /// Pyramid scale between levels, > 1 and <= 4.
+    pub scale_factor: f64,
+    /// Keypoint cap over all levels, 0 = no cap.
+    pub n_features: u32,
+    /// With a cap: spread keypoints with ORB-SLAM's quadtree instead of taking the strongest.
+    pub distribution: bool,
+    /// Orientation bins for the descriptor (0 = continuous angle as OpenCV), 0..=360.
+    pub orientation_bins: u32,
+}
+
+/// Denominator of the rational `delta` (SPEC 1): `delta_num = round(delta * DELTA_DEN)`.
+pub const DELTA_DEN: u32 = 10_000;
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            delta: 0.1,
+            alpha_pct: 35,
+            mode: Mode::Branch,
+            support: 4,
+            straight_tol: 1,
+            border: 16,
+            nms_radius: 3,
+            n_levels: 8,
+            scale_factor: 1.2,
+            n_features: 0,
+            distribution: false,
+            orientation_bins: 30,
+        }
+    }
+}
+
+fn bad(field: &'static str, reason: impl Into<String>) -> Error {
+    Error::InvalidConfig { field, reason: reason.into() }
+}
+
+impl Config {
+    /// Checks every field; the error names the first one out of range.
+    pub fn validate(&self) -> Result<()> {
+        if !self.delta.is_finite() || self.delta <= 0.0 {
+            return Err(bad("delta", format!("must be a finite number > 0, got {}", self.delta)));
+        }
+        if self.delta > 100.0 || self.delta_num() == 0 {
+            return Err(bad("delta", format!("must be in [0.0001, 100], got {}", self.delta)));
+        }
+        if self.alpha_pct >= 100 {
+            return Err(bad("alpha_pct", format!("must be < 100, got {}", self.alpha_pct)));
+        }
+        if !(1..=8).contains(&self.support) {
+            return Err(bad("support", format!("must be 1..=8 neighbours, got {}", self.support)));
+        }
+        if self.straight_tol > 7 {
+            return Err(bad("straight_tol", format!("must be 0..=7, got {}", self.straight_tol)));
+        }
+        if self.border < 7 {
+            return Err(bad("border", format!("must be >= 7 (the L-FAST test reads 7 pixels out), got {}", self.border)));
+        }
+        if self.border > 1024 {
+            return Err(bad("border", format!("must be <= 1024, got {}", self.border)));
+        }
+        if self.nms_radius > 32 {
+            return Err(bad("nms_radius", format!("must be 0..=32, got {}", self.nms_radius)));
+        }
+        if !(1..=32).contains(&self.n_levels) {
+            return Err(bad("n_levels", format!("must be 1..=32, got {}", self.n_levels)));
+        }
+        if !self.scale_factor.is_finite() || self.scale_factor <= 1.0 || self.scale_factor > 4.0 {
+            return Err(bad("scale_factor", format!("must be a finite number in (1, 4], got {}", self.scale_factor)));
+        }
+        if self.orientation_bins > 360 {
+            return Err(bad("orientation_bins", format!("must be 0 (continuous) or 1..=360, got {}", self.orientation_bins)));
+        }
+        Ok(())
+    }
+
+    /// Numerator of the rational delta over [`DELTA_DEN`].
+    pub fn delta_num(&self) -> u32 {
+        (self.delta * DELTA_DEN as f64).round().clamp(0.0, u32::MAX as f64) as u32
+    }
+
+    /// Parses TOML (missing fields take their defaults) and validates.
+    pub fn from_toml_str(s: &str) -> Result<Self> {
+        let cfg: Config =
+            toml::from_str(s).map_err(|e| Error::ConfigParse { path: "<string>".into(), message: e.to_string() })?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    /// Reads and validates a TOML file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.into(), source })?;
+        let cfg: Config =
+            toml::from_str(&text).map_err(|e| Error::ConfigParse { path: path.into(), message: e.to_string() })?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    /// The config as TOML text.
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string_pretty(self).expect("Config always serialises")
+    }
+
+    /// Scale of level `l` relative to the input, `scale_factor^l`.
+    pub fn level_scale(&self, l: u32) -> f64 {
+        self.scale_factor.powi(l as i32)
+    }
+
+    /// Sizes of the pyramid levels for a `width x height` input (SPEC 10):
+    /// `round(W / s^l) x round(H / s^l)`, never below 1.
+    pub fn level_sizes(&self, width: u32, height: u32) -> Vec<(u32, u32)> {
+        (0..self.n_levels)
+            .map(|l| {
+                let s = self.level_scale(l);
+                let w = (width as f64 / s).round().max(1.0) as u32;
+                let h = (height as f64 / s).round().max(1.0) as u32;
+                (w, h)
+            })
+            .collect()
+    }
+}

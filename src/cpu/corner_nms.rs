@@ -1,0 +1,79 @@
+//! SPEC 9: non-maximum suppression among corner candidates. Mirrors shaders/corner_nms.wgsl.
+
+use crate::image::Plane;
+
+/// True iff candidate `q` beats candidate `p`: a greater response, or an equal
+/// one and an earlier (y, x) position, so exactly one of a tied group survives.
+#[inline]
+pub fn beats(rq: f32, q: [u32; 2], rp: f32, p: [u32; 2]) -> bool {
+    rq > rp || (rq == rp && (q[1], q[0]) < (p[1], p[0]))
+}
+
+/// Indices of the candidates that no other candidate within the (2r+1)^2
+/// square beats. `cands` in any order; the result is in input order.
+///
+/// ```
+/// let keep = lfast::cpu::corner_nms::corner_nms(10, 10, &[[2, 2], [3, 3], [9, 9]], &[1.0, 2.0, 0.5], 1);
+/// assert_eq!(keep, vec![1, 2]);
+/// ```
+pub fn corner_nms(width: u32, height: u32, cands: &[[u32; 2]], resp: &[f32], r: u32) -> Vec<usize> {
+    // candidate index per pixel, u32::MAX where none
+    let mut idx = Plane { width, height, data: vec![u32::MAX; width as usize * height as usize] };
+    for (i, &[x, y]) in cands.iter().enumerate() {
+        idx.data[y as usize * width as usize + x as usize] = i as u32;
+    }
+    let r = r as i32;
+    (0..cands.len())
+        .filter(|&i| {
+            let [px, py] = cands[i];
+            let (x0, x1) = ((px as i32 - r).max(0), (px as i32 + r).min(width as i32 - 1));
+            let (y0, y1) = ((py as i32 - r).max(0), (py as i32 + r).min(height as i32 - 1));
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let j = idx.at(x as u32, y as u32);
+                    if j != u32::MAX && j as usize != i && beats(resp[j as usize], cands[j as usize], resp[i], cands[i]) {
+                        return false;
+                    }
+                }
+            }
+            true
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ties_keep_exactly_one() {
+        let c = [[5, 5], [6, 5], [5, 6], [6, 6]];
+        assert_eq!(corner_nms(20, 20, &c, &[1.0; 4], 1), vec![0]);
+        assert_eq!(corner_nms(20, 20, &c, &[1.0; 4], 0), vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn radius_is_a_square() {
+        // (10,10) strongest; (13,13) is at Chebyshev distance 3: suppressed at r=3, kept at r=2
+        let c = [[10, 10], [13, 13], [14, 10]];
+        let r = [5.0, 4.0, 3.0];
+        assert_eq!(corner_nms(30, 30, &c, &r, 3), vec![0]);
+        assert_eq!(corner_nms(30, 30, &c, &r, 2), vec![0, 1, 2]);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn matches_naive(pts in proptest::collection::btree_set((0u32..24, 0u32..24), 0..60), r in 0u32..4, seed in 0u64..1000) {
+            let cands: Vec<[u32; 2]> = pts.iter().map(|&(x, y)| [x, y]).collect();
+            // few distinct responses to force ties
+            let resp: Vec<f32> = (0..cands.len()).map(|i| ((i as u64 * 7 + seed) % 5) as f32).collect();
+            let got = corner_nms(24, 24, &cands, &resp, r);
+            let want: Vec<usize> = (0..cands.len()).filter(|&i| {
+                !(0..cands.len()).any(|j| j != i
+                    && cands[j][0].abs_diff(cands[i][0]) <= r && cands[j][1].abs_diff(cands[i][1]) <= r
+                    && beats(resp[j], cands[j], resp[i], cands[i]))
+            }).collect();
+            proptest::prop_assert_eq!(got, want);
+        }
+    }
+}

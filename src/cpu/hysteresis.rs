@@ -1,0 +1,120 @@
+//! SPEC 7 rule 3: hysteresis. Every STRONG pixel and every WEAK pixel joined to
+//! a STRONG one through 8-connected WEAK pixels becomes an edge (255).
+//! Mirrors shaders/hysteresis.wgsl, which iterates to a fixed point; here a
+//! single flood fill from the STRONG pixels reaches the same fixed point.
+
+use super::classify::{EDGE, STRONG, WEAK};
+use crate::image::Plane;
+
+/// The edge map E (255 = edge, 0 = background) from the classes after
+/// [`rules`](super::rules::rules) (only STRONG, WEAK and NONE remain).
+///
+/// ```
+/// use lfast::Plane;
+/// use lfast::cpu::{classify::*, hysteresis::hysteresis};
+/// let c = Plane::from_vec(5, 1, vec![STRONG, WEAK, WEAK, NONE, WEAK]).unwrap();
+/// assert_eq!(hysteresis(&c).data, vec![255, 255, 255, 0, 0]);
+/// ```
+pub fn hysteresis(classes: &Plane<u8>) -> Plane<u8> {
+    let (w, h) = (classes.width as usize, classes.height as usize);
+    let mut out = Plane::<u8>::new(classes.width, classes.height);
+    let mut stack: Vec<usize> = Vec::new();
+    for (i, &c) in classes.data.iter().enumerate() {
+        if c == STRONG {
+            out.data[i] = EDGE;
+            stack.push(i);
+        }
+    }
+    while let Some(i) = stack.pop() {
+        let (x, y) = (i % w, i / w);
+        let (x0, x1) = (x.saturating_sub(1), (x + 1).min(w - 1));
+        let (y0, y1) = (y.saturating_sub(1), (y + 1).min(h - 1));
+        for ny in y0..=y1 {
+            for nx in x0..=x1 {
+                let j = ny * w + nx;
+                if out.data[j] == 0 && classes.data[j] == WEAK {
+                    out.data[j] = EDGE;
+                    stack.push(j);
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::classify::NONE;
+    use super::*;
+
+    /// Naive reference: sweep the whole image, promoting WEAK pixels next to an
+    /// edge, until a sweep changes nothing (the GPU's scheme, unbounded).
+    fn naive(classes: &Plane<u8>) -> Plane<u8> {
+        let mut e: Vec<u8> = classes.data.iter().map(|&c| if c == STRONG { EDGE } else { 0 }).collect();
+        let (w, h) = (classes.width as i32, classes.height as i32);
+        loop {
+            let mut changed = false;
+            for y in 0..h {
+                for x in 0..w {
+                    let i = (y * w + x) as usize;
+                    if e[i] != 0 || classes.data[i] != WEAK {
+                        continue;
+                    }
+                    let near = (-1..=1).any(|dy| {
+                        (-1..=1).any(|dx| {
+                            let (nx, ny) = (x + dx, y + dy);
+                            nx >= 0 && ny >= 0 && nx < w && ny < h && e[(ny * w + nx) as usize] == EDGE
+                        })
+                    });
+                    if near {
+                        e[i] = EDGE;
+                        changed = true;
+                    }
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        Plane::from_vec(classes.width, classes.height, e).unwrap()
+    }
+
+    #[test]
+    fn long_snake_converges() {
+        // A serpentine WEAK path with the STRONG seed at its far end: the number
+        // of sweeps a propagation scheme needs grows with the path length.
+        let (w, h) = (9u32, 9u32);
+        let mut c = Plane::<u8>::new(w, h);
+        for y in (0..h).step_by(2) {
+            for x in 0..w {
+                c.data[(y * w + x) as usize] = WEAK;
+            }
+            let link_x = if (y / 2) % 2 == 0 { w - 1 } else { 0 };
+            if y + 1 < h {
+                c.data[((y + 1) * w + link_x) as usize] = WEAK;
+            }
+        }
+        c.data[(8 * w) as usize] = STRONG;
+        let e = hysteresis(&c);
+        let n_path = c.data.iter().filter(|&&v| v != NONE).count();
+        assert_eq!(e.data.iter().filter(|&&v| v == EDGE).count(), n_path);
+        assert_eq!(e, naive(&c));
+    }
+
+    #[test]
+    fn weak_alone_is_dropped() {
+        let c = Plane::from_vec(3, 3, vec![WEAK, 0, 0, 0, 0, 0, 0, 0, STRONG]).unwrap();
+        assert_eq!(hysteresis(&c).data, vec![0, 0, 0, 0, 0, 0, 0, 0, 255]);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn matches_naive(w in 1u32..30, h in 1u32..30, seed in proptest::prelude::any::<u64>()) {
+            let mut s = seed;
+            let data: Vec<u8> = (0..w * h).map(|_| { s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                match (s >> 58) % 8 { 0 => STRONG, 1..=4 => WEAK, _ => NONE } }).collect();
+            let c = Plane::from_vec(w, h, data).unwrap();
+            proptest::prop_assert_eq!(hysteresis(&c), naive(&c));
+        }
+    }
+}

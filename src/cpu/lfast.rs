@@ -1,0 +1,284 @@
+//! SPEC 8: the L-FAST corner test on the edge map (paper 3.2, Steps 1-5).
+//! Mirrors shaders/lfast.wgsl.
+
+use super::classify::EDGE;
+use crate::config::Mode;
+use crate::image::Plane;
+use rayon::prelude::*;
+
+/// The radius-3 Bresenham circle in FAST order (index 0 straight up, clockwise).
+pub const CIRCLE: [(i32, i32); 16] = [
+    (0, -3), (1, -3), (2, -2), (3, -1), (3, 0), (3, 1), (2, 2), (1, 3),
+    (0, 3), (-1, 3), (-2, 2), (-3, 1), (-3, 0), (-3, -1), (-2, -2), (-1, -3),
+];
+
+/// Parameters of the corner test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LfastParams {
+    /// Paper or Branch.
+    pub mode: Mode,
+    /// Edge neighbours a non-edge `q_i` needs to support p.
+    pub support: u32,
+    /// Branch mode's straightness tolerance in circle steps.
+    pub straight_tol: u32,
+    /// Distance from every side within which no pixel is tested (>= 7).
+    pub border: u32,
+}
+
+impl LfastParams {
+    /// The corner-test fields of a config.
+    pub fn from_config(c: &crate::Config) -> Self {
+        Self { mode: c.mode, support: c.support, straight_tol: c.straight_tol, border: c.border }
+    }
+}
+
+#[inline(always)]
+fn is_edge(e: &Plane<u8>, x: i32, y: i32) -> bool {
+    e.at(x as u32, y as u32) == EDGE
+}
+
+/// Step 4: does circle point `t` (offset index) support the corner at p?
+/// `q = 2t - p` supports it when it is an edge, or when at least `support` of
+/// its 8 neighbours are. Reads reach 7 pixels from p: p must be >= 7 from every side.
+#[inline]
+pub fn supports(e: &Plane<u8>, px: i32, py: i32, t: usize, support: u32) -> bool {
+    let (dx, dy) = CIRCLE[t];
+    let (qx, qy) = (px + 2 * dx, py + 2 * dy);
+    if is_edge(e, qx, qy) {
+        return true;
+    }
+    let mut n = 0;
+    for ny in -1..=1 {
+        for nx in -1..=1 {
+            if (nx, ny) != (0, 0) && is_edge(e, qx + nx, qy + ny) {
+                n += 1;
+            }
+        }
+    }
+    n >= support
+}
+
+/// The 16-bit mask of edge pixels on the circle around p (bit i = CIRCLE[i]).
+#[inline]
+pub fn circle_mask(e: &Plane<u8>, px: i32, py: i32) -> u32 {
+    let mut m = 0;
+    for (i, &(dx, dy)) in CIRCLE.iter().enumerate() {
+        if is_edge(e, px + dx, py + dy) {
+            m |= 1 << i;
+        }
+    }
+    m
+}
+
+/// Branches of a circle mask: `(start, len)` of each run of consecutive set
+/// bits, cyclically, in order of start index. Empty for 0 and for all-16.
+pub fn branches(mask: u32) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    if mask == 0 || mask == 0xffff {
+        return out;
+    }
+    let bit = |i: usize| mask >> (i % 16) & 1 == 1;
+    for s in 0..16 {
+        if bit(s) && !bit(s + 15) {
+            let len = (0..16).take_while(|&k| bit(s + k)).count();
+            out.push((s, len));
+        }
+    }
+    out
+}
+
+/// The L-FAST decision for edge pixel p (SPEC 8). p must lie >= 7 pixels from every side.
+pub fn is_corner(e: &Plane<u8>, px: i32, py: i32, p: &LfastParams) -> bool {
+    let mask = circle_mask(e, px, py);
+    match p.mode {
+        Mode::Paper => {
+            let n = mask.count_ones();
+            if n < 2 {
+                return false;
+            }
+            if n == 2 {
+                let a = mask.trailing_zeros();
+                let b = 31 - mask.leading_zeros();
+                if b - a == 8 {
+                    return false; // p on the line of the only two points
+                }
+            }
+            let mut supported = 0;
+            for t in 0..16 {
+                if mask >> t & 1 == 1 && supports(e, px, py, t, p.support) {
+                    supported += 1;
+                    if supported >= 2 {
+                        return true;
+                    }
+                }
+            }
+            false
+        }
+        Mode::Branch => {
+            let mut ts = [0usize; 8];
+            let mut n = 0;
+            for (s, len) in branches(mask) {
+                let t = (s + (len - 1) / 2) % 16;
+                if supports(e, px, py, t, p.support) {
+                    ts[n] = t;
+                    n += 1;
+                }
+            }
+            match n {
+                0 | 1 => false,
+                2 => {
+                    let d = ts[0].abs_diff(ts[1]);
+                    d.min(16 - d) < 8 - p.straight_tol as usize
+                }
+                _ => true,
+            }
+        }
+    }
+}
+
+/// All L-FAST candidates of an edge map, in raster order: edge pixels at least
+/// `border` from every side, on in `mask` (if any), that pass [`is_corner`].
+pub fn lfast(e: &Plane<u8>, mask: Option<&Plane<u8>>, p: &LfastParams) -> Vec<[u32; 2]> {
+    let b = p.border.max(7);
+    if e.width <= 2 * b || e.height <= 2 * b {
+        return Vec::new();
+    }
+    let rows: Vec<Vec<[u32; 2]>> = (b..e.height - b)
+        .into_par_iter()
+        .map(|y| {
+            let row = e.row(y);
+            let mrow = mask.map(|m| m.row(y));
+            let mut out = Vec::new();
+            for x in b..e.width - b {
+                if row[x as usize] == EDGE
+                    && mrow.is_none_or(|m| m[x as usize] != 0)
+                    && is_corner(e, x as i32, y as i32, p)
+                {
+                    out.push([x, y]);
+                }
+            }
+            out
+        })
+        .collect();
+    rows.concat()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 31x31 edge map with the given edge pixels.
+    fn map(pts: impl IntoIterator<Item = (i32, i32)>) -> Plane<u8> {
+        let mut e = Plane::<u8>::new(31, 31);
+        for (x, y) in pts {
+            e.data[(y * 31 + x) as usize] = EDGE;
+        }
+        e
+    }
+
+    fn params(mode: Mode) -> LfastParams {
+        LfastParams { mode, support: 4, straight_tol: 1, border: 7 }
+    }
+
+    const C: i32 = 15;
+
+    #[test]
+    fn l_corner_found_both_modes() {
+        // Two 1-pixel-wide arms from (15,15): right and down.
+        let e = map((0..12).map(|i| (C + i, C)).chain((1..12).map(|i| (C, C + i))));
+        for mode in [Mode::Paper, Mode::Branch] {
+            assert!(is_corner(&e, C, C, &params(mode)), "{mode:?}");
+            assert_eq!(lfast(&e, None, &params(mode)), vec![[C as u32, C as u32]], "{mode:?}");
+        }
+    }
+
+    #[test]
+    fn t_junction_found_both_modes() {
+        // A horizontal line through p and a stem going down.
+        let e = map((-12..12).map(|i| (C + i, C)).chain((1..12).map(|i| (C, C + i))));
+        for mode in [Mode::Paper, Mode::Branch] {
+            assert!(is_corner(&e, C, C, &params(mode)), "{mode:?}");
+        }
+    }
+
+    #[test]
+    fn straight_line_rejected_both_modes() {
+        for pts in [
+            (-12..12).map(|i| (C + i, C)).collect::<Vec<_>>(), // horizontal
+            (-12..12).map(|i| (C, C + i)).collect(),           // vertical
+            (-12..12).map(|i| (C + i, C + i)).collect(),       // diagonal
+        ] {
+            let e = map(pts);
+            for mode in [Mode::Paper, Mode::Branch] {
+                assert!(!is_corner(&e, C, C, &params(mode)), "{mode:?}");
+                assert!(lfast(&e, None, &params(mode)).is_empty(), "{mode:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn thick_line_paper_vs_branch() {
+        // A 2-pixel-thick horizontal line: the circle meets it at 4 pixels, two
+        // per side. Paper mode sees 4 points, not 2 opposite ones, and accepts;
+        // Branch sees two opposite branches and rejects (the reason Branch exists).
+        let e = map((-12..12).flat_map(|i| [(C + i, C), (C + i, C + 1)]));
+        assert_eq!(circle_mask(&e, C, C).count_ones(), 4);
+        assert!(is_corner(&e, C, C, &params(Mode::Paper)));
+        assert!(!is_corner(&e, C, C, &params(Mode::Branch)));
+    }
+
+    #[test]
+    fn isolated_point_and_full_circle_rejected() {
+        let e = map([(C, C)]);
+        assert!(!is_corner(&e, C, C, &params(Mode::Paper)));
+        assert!(!is_corner(&e, C, C, &params(Mode::Branch)));
+        // a filled disc: all 16 circle pixels are edge -> no branch
+        let e = map((-7..=7).flat_map(|dy| (-7..=7).map(move |dx| (C + dx, C + dy))));
+        assert_eq!(circle_mask(&e, C, C), 0xffff);
+        assert!(!is_corner(&e, C, C, &params(Mode::Branch)));
+    }
+
+    #[test]
+    fn support_by_neighbours() {
+        // Arms that stop at the circle: q = 2t - p is not an edge; its 8
+        // neighbours decide. With support 4, a q with 3 edge neighbours fails.
+        let mut pts = vec![(C, C), (C + 1, C), (C + 2, C), (C + 3, C), (C, C + 1), (C, C + 2), (C, C + 3)];
+        let e = map(pts.clone());
+        assert!(!is_corner(&e, C, C, &params(Mode::Branch)));
+        // give q = (21, 15) four edge neighbours, and q = (15, 21) four too
+        pts.extend([(C + 5, C - 1), (C + 5, C), (C + 5, C + 1), (C + 7, C)]);
+        pts.extend([(C - 1, C + 5), (C, C + 5), (C + 1, C + 5), (C, C + 7)]);
+        let e = map(pts);
+        assert!(supports(&e, C, C, 4, 4) && supports(&e, C, C, 8, 4));
+        assert!(!supports(&e, C, C, 4, 5));
+        assert!(is_corner(&e, C, C, &params(Mode::Branch)));
+        assert!(is_corner(&e, C, C, &params(Mode::Paper)));
+    }
+
+    #[test]
+    fn branch_middles_and_straightness() {
+        assert_eq!(branches(0b0000_0000_0000_0111), vec![(0, 3)]);
+        // wrap-around branch 15, 0, 1: starts at 15
+        assert_eq!(branches(0b1000_0000_0000_0011), vec![(15, 3)]);
+        assert_eq!(branches(0b0000_0001_0000_0001), vec![(0, 1), (8, 1)]);
+        // Two branches 7 steps apart (157.5°) are a line at straight_tol 1, 6 are not.
+        let arm = |t: usize| (1..12).map(move |k| (C + CIRCLE[t].0 * k / 3, C + CIRCLE[t].1 * k / 3));
+        let e7 = map(arm(0).chain(arm(7)).chain([(C, C)]));
+        assert!(!is_corner(&e7, C, C, &params(Mode::Branch)));
+        let e6 = map(arm(0).chain(arm(6)).chain([(C, C)]));
+        assert!(is_corner(&e6, C, C, &params(Mode::Branch)));
+        let tol0 = LfastParams { straight_tol: 0, ..params(Mode::Branch) };
+        assert!(is_corner(&e7, C, C, &tol0));
+    }
+
+    #[test]
+    fn border_and_mask_respected() {
+        let e = map((0..12).map(|i| (C + i, C)).chain((1..12).map(|i| (C, C + i))));
+        let far = LfastParams { border: 16, ..params(Mode::Branch) };
+        assert!(lfast(&e, None, &far).is_empty());
+        let mut m = Plane::<u8>::new(31, 31);
+        assert!(lfast(&e, Some(&m), &params(Mode::Branch)).is_empty());
+        m.data[(C * 31 + C) as usize] = 7;
+        assert_eq!(lfast(&e, Some(&m), &params(Mode::Branch)).len(), 1);
+    }
+}

@@ -1,0 +1,241 @@
+//! SPEC 5: the sliding-window statistics behind the local thresholds TL1, TL2.
+//! Mirrors shaders/local_threshold.wgsl.
+//!
+//! Windows overlap by half, so each pixel lies in up to four of them. Instead of
+//! sorting each window, the image is cut into *cells* at every window edge; one
+//! 256-bin histogram per cell is built in a single pass, and a window's
+//! histogram is the sum of its cells'. Min, max and lower median come from it.
+
+use crate::image::Plane;
+use rayon::prelude::*;
+
+/// Min, max and lower median of `M8` in one window.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WindowStats {
+    /// Smallest M8.
+    pub min: u8,
+    /// Largest M8.
+    pub max: u8,
+    /// Element `(n-1)/2` of the sorted values.
+    pub median: u8,
+}
+
+impl WindowStats {
+    /// `V3 = max + median + min`, three times the paper's V.
+    pub fn v3(&self) -> u32 {
+        self.max as u32 + self.median as u32 + self.min as u32
+    }
+}
+
+/// The window layout of an image and each window's statistics.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WindowGrid {
+    /// Window width `a = max(1, W/5)`.
+    pub a: u32,
+    /// Window height `b = max(1, H/5)`.
+    pub b: u32,
+    /// Window origins along x.
+    pub xs: Vec<u32>,
+    /// Window origins along y.
+    pub ys: Vec<u32>,
+    /// Per window, row-major: window `(i, j)` (x index i, y index j) is `stats[j * xs.len() + i]`.
+    pub stats: Vec<WindowStats>,
+    /// For each column x, the index in `xs` of the window whose centre is nearest.
+    pub col_window: Vec<u32>,
+    /// For each row y, the index in `ys` of the window whose centre is nearest.
+    pub row_window: Vec<u32>,
+}
+
+impl WindowGrid {
+    /// `V3` of the window that pixel (x, y) uses.
+    #[inline(always)]
+    pub fn v3_at(&self, x: u32, y: u32) -> u32 {
+        let i = self.col_window[x as usize] as usize;
+        let j = self.row_window[y as usize] as usize;
+        self.stats[j * self.xs.len() + i].v3()
+    }
+}
+
+/// Window origins along one axis of length `len` for window size `size`:
+/// `0, stride, 2*stride, ...` while the window fits, then one flush with the end.
+///
+/// ```
+/// // KITTI width 1241: a = 248, stride 124
+/// let xs = lfast::cpu::local_threshold::window_origins(1241, 248);
+/// assert_eq!(xs, vec![0, 124, 248, 372, 496, 620, 744, 868, 992, 993]);
+/// ```
+pub fn window_origins(len: u32, size: u32) -> Vec<u32> {
+    let stride = (size / 2).max(1);
+    let mut v: Vec<u32> = (0..).map(|i| i * stride).take_while(|&o| o + size <= len).collect();
+    let last = len - size;
+    if v.last() != Some(&last) {
+        v.push(last);
+    }
+    v
+}
+
+/// For each coordinate `0..len`, the index of the window whose centre
+/// `o + (size-1)/2` is nearest (compared doubled, ties to the lower index).
+pub fn nearest_windows(origins: &[u32], size: u32, len: u32) -> Vec<u32> {
+    (0..len)
+        .map(|c| {
+            let mut best = 0usize;
+            let mut best_d = u32::MAX;
+            for (i, &o) in origins.iter().enumerate() {
+                let d = (2 * c as i64 - (2 * o as i64 + size as i64 - 1)).unsigned_abs() as u32;
+                if d < best_d {
+                    best_d = d;
+                    best = i;
+                }
+            }
+            best as u32
+        })
+        .collect()
+}
+
+/// Min, max and lower median of a histogram with `n > 0` entries.
+fn stats_of(h: &[u32; 256]) -> WindowStats {
+    let n: u32 = h.iter().sum();
+    let min = h.iter().position(|&c| c > 0).unwrap_or(0) as u8;
+    let max = h.iter().rposition(|&c| c > 0).unwrap_or(0) as u8;
+    let target = (n.max(1) - 1) / 2;
+    let mut acc = 0u32;
+    let mut median = 0u8;
+    for (v, &c) in h.iter().enumerate() {
+        acc += c;
+        if acc > target {
+            median = v as u8;
+            break;
+        }
+    }
+    WindowStats { min, max, median }
+}
+
+/// Cut points of one axis: 0, `len`, and every window's two edges, sorted.
+fn cuts(origins: &[u32], size: u32, len: u32) -> Vec<u32> {
+    let mut c: Vec<u32> = origins.iter().flat_map(|&o| [o, o + size]).chain([0, len]).collect();
+    c.sort_unstable();
+    c.dedup();
+    c
+}
+
+/// Window statistics of `M8 = min(M, 255)` (SPEC 5).
+pub fn local_threshold(m: &Plane<u16>) -> WindowGrid {
+    let (w, h) = (m.width, m.height);
+    let a = (w / 5).max(1);
+    let b = (h / 5).max(1);
+    let xs = window_origins(w, a);
+    let ys = window_origins(h, b);
+    let cx = cuts(&xs, a, w);
+    let cy = cuts(&ys, b, h);
+    let (ncx, ncy) = (cx.len() - 1, cy.len() - 1);
+
+    // One histogram per cell, one band of cells per task.
+    let cells: Vec<Vec<[u32; 256]>> = (0..ncy)
+        .into_par_iter()
+        .map(|j| {
+            let mut band = vec![[0u32; 256]; ncx];
+            for y in cy[j]..cy[j + 1] {
+                let row = m.row(y);
+                for (i, hist) in band.iter_mut().enumerate() {
+                    for &v in &row[cx[i] as usize..cx[i + 1] as usize] {
+                        hist[v.min(255) as usize] += 1;
+                    }
+                }
+            }
+            band
+        })
+        .collect();
+
+    let cell_of = |cuts: &[u32], v: u32| cuts.binary_search(&v).expect("window edges are cut points");
+    let mut stats = Vec::with_capacity(xs.len() * ys.len());
+    for &y0 in &ys {
+        let (j0, j1) = (cell_of(&cy, y0), cell_of(&cy, y0 + b));
+        for &x0 in &xs {
+            let (i0, i1) = (cell_of(&cx, x0), cell_of(&cx, x0 + a));
+            let mut hist = [0u32; 256];
+            for band in &cells[j0..j1] {
+                for cell in &band[i0..i1] {
+                    for (acc, &c) in hist.iter_mut().zip(cell.iter()) {
+                        *acc += c;
+                    }
+                }
+            }
+            stats.push(stats_of(&hist));
+        }
+    }
+    WindowGrid {
+        a,
+        b,
+        col_window: nearest_windows(&xs, a, w),
+        row_window: nearest_windows(&ys, b, h),
+        xs,
+        ys,
+        stats,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kitti_layout() {
+        // 1241x376: a = 248, b = 75, strides 124 and 37
+        let xs = window_origins(1241, 248);
+        assert_eq!(xs, vec![0, 124, 248, 372, 496, 620, 744, 868, 992, 993]);
+        let ys = window_origins(376, 75);
+        assert_eq!(ys, vec![0, 37, 74, 111, 148, 185, 222, 259, 296, 301]);
+        // Centres: x window i at xs[i] + 123.5, so windows 0 and 1 meet at 185.5.
+        let cw = nearest_windows(&xs, 248, 1241);
+        assert_eq!((cw[0], cw[185], cw[186]), (0, 0, 1));
+        // The last two windows' centres are 1115.5 and 1116.5: column 1116 ties
+        // -> window 8; 1117 and beyond -> 9.
+        assert_eq!((cw[1115], cw[1116], cw[1117], cw[1240]), (8, 8, 9, 9));
+        let rw = nearest_windows(&ys, 75, 376);
+        assert_eq!((rw[0], rw[55], rw[56], rw[375]), (0, 0, 1, 9));
+    }
+
+    #[test]
+    fn tiny_images() {
+        assert_eq!(window_origins(1, 1), vec![0]);
+        assert_eq!(window_origins(4, 1), vec![0, 1, 2, 3]);
+        assert_eq!(window_origins(9, 1), (0..9).collect::<Vec<_>>());
+        assert_eq!(window_origins(10, 2), (0..9).collect::<Vec<_>>());
+        let m = Plane::from_vec(1, 1, vec![300u16]).unwrap();
+        let g = local_threshold(&m);
+        assert_eq!(g.stats, vec![WindowStats { min: 255, max: 255, median: 255 }]);
+    }
+
+    #[test]
+    fn stats_on_literal() {
+        // 10x5 image: a = 2, b = 1, windows of 2x1 pixels.
+        let m = Plane::from_vec(10, 5, (0..50u16).map(|i| i * 7).collect()).unwrap();
+        let g = local_threshold(&m);
+        assert_eq!(g.xs, (0..9).collect::<Vec<_>>());
+        assert_eq!(g.ys, (0..5).collect::<Vec<_>>());
+        // window (0, 0) holds 0 and 7: lower median = 0
+        assert_eq!(g.stats[0], WindowStats { min: 0, max: 7, median: 0 });
+        // window (3, 4) holds pixels 43, 44 -> 301 and 308, both clipped to 255
+        assert_eq!(g.stats[4 * 9 + 3], WindowStats { min: 255, max: 255, median: 255 });
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn matches_naive_sort(w in 1u32..40, h in 1u32..40, seed in proptest::prelude::any::<u64>()) {
+            let mut s = seed;
+            let data: Vec<u16> = (0..w * h).map(|_| { s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407); ((s >> 40) % 300) as u16 }).collect();
+            let m = Plane::from_vec(w, h, data).unwrap();
+            let g = local_threshold(&m);
+            for (j, &y0) in g.ys.iter().enumerate() {
+                for (i, &x0) in g.xs.iter().enumerate() {
+                    let mut v: Vec<u8> = vec![];
+                    for y in y0..y0 + g.b { for x in x0..x0 + g.a { v.push(m.at(x, y).min(255) as u8); } }
+                    v.sort();
+                    let want = WindowStats { min: v[0], max: *v.last().unwrap(), median: v[(v.len() - 1) / 2] };
+                    proptest::prop_assert_eq!(g.stats[j * g.xs.len() + i], want);
+                }
+            }
+        }
+    }
+}

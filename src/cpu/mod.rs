@@ -1,0 +1,379 @@
+//! The CPU reference path: one module per stage, named as its shader in
+//! shaders/, and [`CpuDetector`], which chains them as SPEC.md says.
+//!
+//! Every stage is a plain function over [`Plane`]s, so a test can run any one
+//! of them on the output of the previous stage (the GPU cross-check does
+//! exactly that, stage by stage).
+
+pub mod blur;
+pub mod classify;
+pub mod corner_nms;
+pub mod gradient;
+pub mod histogram;
+pub mod hysteresis;
+pub mod lfast;
+pub mod local_threshold;
+pub mod median;
+pub mod nms;
+pub mod orb;
+pub mod orientation;
+pub mod otsu;
+pub mod pyramid;
+pub mod response;
+pub mod rules;
+pub mod select;
+
+use crate::config::{Config, DELTA_DEN};
+use crate::error::{Error, Result};
+use crate::image::{GrayView, Plane};
+use crate::keypoint::{Descriptor, KeyPoint};
+use gradient::Gradient;
+use local_threshold::WindowGrid;
+use orb::{Pattern, RotatedPatterns};
+use rayon::prelude::*;
+use select::Corner;
+
+/// The improved Canny edge map of one image with every intermediate (SPEC 1-7).
+#[derive(Clone, Debug)]
+pub struct EdgeMap {
+    /// D: the flagged-median output (SPEC 1).
+    pub denoised: Plane<u8>,
+    /// gx2, gy2, S and M (SPEC 2).
+    pub gradient: Gradient,
+    /// 1 where a pixel survives NMS (SPEC 3).
+    pub nms: Plane<u8>,
+    /// Histogram of M8 (SPEC 4).
+    pub histogram: [u32; 256],
+    /// Otsu's k; `None` when the histogram has a single non-empty bin (no edges).
+    pub otsu_k: Option<u8>,
+    /// The local-threshold windows and their statistics (SPEC 5).
+    pub windows: WindowGrid,
+    /// Classes of SPEC 6 ([`classify::NONE`] .. [`classify::STRONG`]).
+    pub classes: Plane<u8>,
+    /// Classes after rules 1 and 2 of SPEC 7.
+    pub ruled: Plane<u8>,
+    /// E: 255 on edges, 0 elsewhere (SPEC 7).
+    pub edges: Plane<u8>,
+}
+
+impl EdgeMap {
+    /// T1 = k + 1, or `None` when the image has no edges.
+    pub fn t1(&self) -> Option<u32> {
+        self.otsu_k.map(|k| k as u32 + 1)
+    }
+
+    /// The gradient magnitude M.
+    pub fn magnitude(&self) -> &Plane<u16> {
+        &self.gradient.m
+    }
+
+    /// TL1 of each pixel's window, `(100 + alpha_pct) * V3 / 300` rounded down
+    /// and capped at 255, as a picture of the local threshold.
+    pub fn local_threshold_map(&self, alpha_pct: u32) -> Plane<u8> {
+        let (w, h) = (self.edges.width, self.edges.height);
+        let mut out = Plane::<u8>::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                out.data[(y * w + x) as usize] = ((100 + alpha_pct) * self.windows.v3_at(x, y) / 300).min(255) as u8;
+            }
+        }
+        out
+    }
+}
+
+/// Runs SPEC 1-7 on one image.
+///
+/// ```
+/// // a bright square on black: its outline is the edge map
+/// let mut img = lfast::Plane::<u8>::new(32, 32);
+/// for y in 8..24 { for x in 8..24 { img.data[y * 32 + x] = 200; } }
+/// let em = lfast::cpu::edge_map(&img, &lfast::Config::default());
+/// assert!(em.edges.data.iter().any(|&v| v == 255));
+/// assert_eq!(em.edges.at(16, 16), 0); // inside the flat square
+/// ```
+pub fn edge_map(img: &Plane<u8>, cfg: &Config) -> EdgeMap {
+    let denoised = median::median(img, cfg.delta_num(), DELTA_DEN);
+    let gradient = gradient::gradient(&denoised);
+    let nms = nms::nms(&gradient);
+    let histogram = histogram::histogram(&gradient.m);
+    let otsu_k = otsu::otsu(&histogram);
+    let windows = local_threshold::local_threshold(&gradient.m);
+    let classes = classify::classify(&gradient.m, &nms, otsu_k.map(|k| k as u32 + 1), &windows, cfg.alpha_pct);
+    let ruled = rules::rules(&classes);
+    let edges = hysteresis::hysteresis(&ruled);
+    EdgeMap { denoised, gradient, nms, histogram, otsu_k, windows, classes, ruled, edges }
+}
+
+/// The L-FAST detector and ORB descriptor on the CPU.
+///
+/// ```
+/// use lfast::{Config, cpu::CpuDetector};
+/// let det = CpuDetector::new(Config::default()).unwrap();
+/// let img = lfast::Plane::<u8>::new(64, 48);
+/// let (kps, desc) = det.detect_and_compute(img.view(), None).unwrap();
+/// assert!(kps.is_empty() && desc.is_empty()); // a flat image has no corners
+/// ```
+#[derive(Clone, Debug)]
+pub struct CpuDetector {
+    cfg: Config,
+    pattern: &'static Pattern,
+    rotated: Option<RotatedPatterns>,
+    mask_radius: u32,
+}
+
+/// A detected corner's level, level-pixel position and Harris response, kept
+/// until description.
+type Found = (Vec<Plane<u8>>, Vec<Corner>);
+
+impl CpuDetector {
+    /// Validates `cfg` and prepares the rotated patterns.
+    pub fn new(cfg: Config) -> Result<Self> {
+        cfg.validate()?;
+        let pattern = Pattern::orb();
+        let rotated = (cfg.orientation_bins > 0).then(|| RotatedPatterns::new(pattern, cfg.orientation_bins));
+        // A corner's descriptor reads the smoothed image up to the pattern
+        // radius (+3 for the 7x7 blur) and its orientation the radius-15 disc.
+        let mask_radius = (pattern.radius() + 3).max(orientation::HALF_PATCH) as u32;
+        Ok(Self { cfg, pattern, rotated, mask_radius })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// Distance kept between keypoints and the boundary of a mask, in level pixels.
+    pub fn mask_radius(&self) -> u32 {
+        self.mask_radius
+    }
+
+    /// The improved Canny edge map of `image` with its intermediates.
+    pub fn edges(&self, image: GrayView<'_>) -> Result<EdgeMap> {
+        Ok(edge_map(&image.to_plane(), &self.cfg))
+    }
+
+    /// L-FAST keypoints of `image` (SPEC 1-10), with orientation, in SPEC 9 order.
+    /// `mask`: any nonzero pixel is "on"; no keypoint lies within
+    /// [`mask_radius`](Self::mask_radius) of an "off" pixel, at any level.
+    pub fn detect(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<Vec<KeyPoint>> {
+        let (levels, corners) = self.find(image, mask)?;
+        Ok(corners.iter().map(|c| self.keypoint(&levels, c).0).collect())
+    }
+
+    /// Keypoints and their descriptors (SPEC 1-11); `desc[i]` belongs to `kps[i]`.
+    pub fn detect_and_compute(
+        &self,
+        image: GrayView<'_>,
+        mask: Option<GrayView<'_>>,
+    ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
+        let (levels, corners) = self.find(image, mask)?;
+        let smoothed = smooth_used_levels(&levels, corners.iter().map(|c| c.level));
+        Ok(corners
+            .par_iter()
+            .map(|c| {
+                let (kp, bin) = self.keypoint(&levels, c);
+                (kp, self.describe(&smoothed[c.level as usize], c.x, c.y, kp.angle, bin))
+            })
+            .unzip())
+    }
+
+    /// Descriptors of caller-supplied keypoints (from any detector). A keypoint
+    /// is sampled at level `octave`, at pixel `floor(pt / s^octave + 0.25)`,
+    /// which is the intended pixel both for lfast's half-pixel convention and
+    /// OpenCV's integer one. Orientation is recomputed from the image (the
+    /// `angle` field is not read), so the result equals `detect_and_compute`'s.
+    pub fn compute(&self, image: GrayView<'_>, keypoints: &[KeyPoint]) -> Result<Vec<Descriptor>> {
+        let sizes = self.cfg.level_sizes(image.width(), image.height());
+        let mut at = Vec::with_capacity(keypoints.len());
+        for (index, kp) in keypoints.iter().enumerate() {
+            let bad = |reason: String| Error::InvalidKeypoint { index, reason };
+            if kp.octave < 0 || kp.octave as u32 >= self.cfg.n_levels {
+                return Err(bad(format!("octave {} is outside 0..{}", kp.octave, self.cfg.n_levels)));
+            }
+            if !kp.pt.x.is_finite() || !kp.pt.y.is_finite() {
+                return Err(bad(format!("position ({}, {}) is not finite", kp.pt.x, kp.pt.y)));
+            }
+            let l = kp.octave as u32;
+            let s = self.cfg.level_scale(l);
+            let (x, y) = ((kp.pt.x as f64 / s + 0.25).floor(), (kp.pt.y as f64 / s + 0.25).floor());
+            let (w, h) = sizes[l as usize];
+            if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
+                return Err(bad(format!("position ({}, {}) is outside level {l} ({w}x{h})", kp.pt.x, kp.pt.y)));
+            }
+            at.push(Corner { level: l, x: x as u32, y: y as u32, response: kp.response });
+        }
+        let top = at.iter().map(|c| c.level + 1).max().unwrap_or(1) as usize;
+        let levels = pyramid::pyramid(&image.to_plane(), &sizes[..top]);
+        let smoothed = smooth_used_levels(&levels, at.iter().map(|c| c.level));
+        Ok(at
+            .par_iter()
+            .map(|c| {
+                let (kp, bin) = self.keypoint(&levels, c);
+                self.describe(&smoothed[c.level as usize], c.x, c.y, kp.angle, bin)
+            })
+            .collect())
+    }
+
+    /// SPEC 1-9 on every level: the pyramid and the selected corners in SPEC 9 order.
+    fn find(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<Found> {
+        if let Some(m) = mask
+            && (m.width(), m.height()) != (image.width(), image.height())
+        {
+            return Err(Error::MaskSize {
+                mask_width: m.width(),
+                mask_height: m.height(),
+                width: image.width(),
+                height: image.height(),
+            });
+        }
+        let sizes = self.cfg.level_sizes(image.width(), image.height());
+        let levels = pyramid::pyramid(&image.to_plane(), &sizes);
+        let masks: Option<Vec<Plane<u8>>> = mask.map(|m| {
+            let m = m.to_plane();
+            sizes.par_iter().map(|&(w, h)| level_mask(&m, w, h, self.mask_radius)).collect()
+        });
+        let params = lfast::LfastParams::from_config(&self.cfg);
+        let per_level: Vec<Vec<Corner>> = levels
+            .par_iter()
+            .enumerate()
+            .map(|(l, img)| {
+                let b = params.border;
+                if img.width <= 2 * b || img.height <= 2 * b {
+                    return Vec::new();
+                }
+                let em = edge_map(img, &self.cfg);
+                let cands = lfast::lfast(&em.edges, masks.as_ref().map(|m| &m[l]), &params);
+                let resp = response::responses(&em.denoised, &cands);
+                corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
+                    .into_iter()
+                    .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] })
+                    .collect()
+            })
+            .collect();
+        let corners = select::select(per_level, &sizes, self.cfg.n_features, self.cfg.distribution);
+        Ok((levels, corners))
+    }
+
+    /// The keypoint of a corner (SPEC 10) with its angle, and its orientation bin.
+    fn keypoint(&self, levels: &[Plane<u8>], c: &Corner) -> (KeyPoint, u32) {
+        let s = self.cfg.level_scale(c.level);
+        let (m10, m01) = orientation::moments(&levels[c.level as usize], c.x, c.y);
+        let bin = self.rotated.as_ref().map_or(0, |r| r.bins.bin_of(m10, m01));
+        let kp = KeyPoint {
+            pt: glam::Vec2::new(((c.x as f64 + 0.5) * s) as f32, ((c.y as f64 + 0.5) * s) as f32),
+            size: (31.0 * s) as f32,
+            angle: orientation::angle_deg(m10, m01),
+            response: c.response,
+            octave: c.level as i32,
+            class_id: -1,
+        };
+        (kp, bin)
+    }
+
+    fn describe(&self, smoothed: &Plane<u8>, x: u32, y: u32, angle: f32, bin: u32) -> Descriptor {
+        match &self.rotated {
+            Some(r) => orb::describe(smoothed, x, y, &r.tables[bin as usize]),
+            None => orb::describe_continuous(smoothed, x, y, angle, self.pattern),
+        }
+    }
+}
+
+/// The 7x7 sigma-2 blur of each level some corner uses (others stay empty).
+fn smooth_used_levels(levels: &[Plane<u8>], used: impl Iterator<Item = u32>) -> Vec<Plane<u8>> {
+    let mut need = vec![false; levels.len()];
+    used.for_each(|l| need[l as usize] = true);
+    levels
+        .par_iter()
+        .zip(need)
+        .map(|(lv, n)| if n { blur::gaussian_blur(lv, &blur::ORB_KERNEL) } else { Plane::new(0, 0) })
+        .collect()
+}
+
+/// The mask at a `w x h` level: a level pixel is on only if every input pixel
+/// under its footprint is on, then eroded by `radius` level pixels (square).
+pub fn level_mask(mask: &Plane<u8>, w: u32, h: u32, radius: u32) -> Plane<u8> {
+    let (w0, h0) = (mask.width as u64, mask.height as u64);
+    let span = |i: u64, n: u64, n0: u64| (i * n0 / n, ((i + 1) * n0).div_ceil(n).min(n0).max(i * n0 / n + 1));
+    // footprint min along x for every input row, then along y
+    let mut tmp = vec![0u8; h0 as usize * w as usize];
+    for y in 0..h0 as usize {
+        let row = mask.row(y as u32);
+        for x in 0..w as u64 {
+            let (a, b) = span(x, w as u64, w0);
+            tmp[y * w as usize + x as usize] = row[a as usize..b as usize].iter().all(|&v| v != 0) as u8;
+        }
+    }
+    let mut lv = Plane::<u8>::new(w, h);
+    for y in 0..h as u64 {
+        let (a, b) = span(y, h as u64, h0);
+        for x in 0..w as usize {
+            lv.data[y as usize * w as usize + x] = (a..b).all(|yy| tmp[yy as usize * w as usize + x] != 0) as u8;
+        }
+    }
+    erode(&lv, radius)
+}
+
+/// Square erosion of a 0/1 plane by `r` (min filter), replicate border.
+fn erode(p: &Plane<u8>, r: u32) -> Plane<u8> {
+    if r == 0 {
+        return p.clone();
+    }
+    let r = r as i32;
+    let mut tmp = Plane::<u8>::new(p.width, p.height);
+    for y in 0..p.height as i32 {
+        for x in 0..p.width as i32 {
+            tmp.data[(y * p.width as i32 + x) as usize] = (-r..=r).map(|d| p.clamped(x + d, y)).min().unwrap_or(0);
+        }
+    }
+    let mut out = Plane::<u8>::new(p.width, p.height);
+    for y in 0..p.height as i32 {
+        for x in 0..p.width as i32 {
+            out.data[(y * p.width as i32 + x) as usize] = (-r..=r).map(|d| tmp.clamped(x, y + d)).min().unwrap_or(0);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn level_mask_footprints_and_erosion() {
+        // one off pixel in the input turns off its level pixel and, after erosion, a square
+        let mut m = Plane::<u8>::new(40, 40);
+        m.data.fill(1);
+        m.data[20 * 40 + 20] = 0;
+        let lv = level_mask(&m, 20, 20, 0);
+        assert_eq!(lv.data.iter().filter(|&&v| v == 0).count(), 1);
+        assert_eq!(lv.at(10, 10), 0);
+        let lv = level_mask(&m, 20, 20, 2);
+        assert_eq!(lv.data.iter().filter(|&&v| v == 0).count(), 25);
+        // a non-integer ratio: footprints overlap, so two level pixels may go off
+        let lv = level_mask(&m, 17, 17, 0);
+        let off = lv.data.iter().filter(|&&v| v == 0).count();
+        assert!((1..=4).contains(&off), "{off}");
+    }
+
+    #[test]
+    fn mask_size_mismatch_is_an_error() {
+        let det = CpuDetector::new(Config::default()).unwrap();
+        let img = Plane::<u8>::new(64, 64);
+        let m = Plane::<u8>::new(63, 64);
+        let e = det.detect(img.view(), Some(m.view())).unwrap_err();
+        assert!(matches!(e, Error::MaskSize { mask_width: 63, .. }), "{e}");
+    }
+
+    #[test]
+    fn compute_rejects_bad_keypoints() {
+        let det = CpuDetector::new(Config::default()).unwrap();
+        let img = Plane::<u8>::new(64, 64);
+        let mut kp = KeyPoint::new(10.0, 10.0, 31.0);
+        kp.octave = 9;
+        assert!(det.compute(img.view(), &[kp]).unwrap_err().to_string().contains("keypoint 0: octave 9"));
+        let kp = KeyPoint::new(64.5, 10.0, 31.0);
+        assert!(det.compute(img.view(), &[KeyPoint::new(1.0, 1.0, 7.0), kp]).unwrap_err().to_string().contains("keypoint 1"));
+        let kp = KeyPoint::new(f32::NAN, 10.0, 31.0);
+        assert!(det.compute(img.view(), &[kp]).is_err());
+    }
+}

@@ -1,0 +1,84 @@
+//! SPEC 9: Harris corner response on D, as OpenCV ORB's HARRIS_SCORE (7x7 block,
+//! 3x3 Sobel, k = 0.04). Mirrors shaders/response.wgsl: the sums are exact
+//! integers, only the final formula is f32, evaluated in the same order.
+
+use crate::image::Plane;
+
+/// Harris block size.
+pub const BLOCK: i32 = 7;
+/// Harris k.
+pub const HARRIS_K: f32 = 0.04;
+
+/// The integer structure-tensor sums `(a, b, c) = (ΣIx², ΣIy², ΣIxIy)` over the
+/// 7x7 block centred on (x, y), reads clamped (never needed for p >= 4 from the sides).
+#[inline]
+pub fn structure_sums(img: &Plane<u8>, x: u32, y: u32) -> (i32, i32, i32) {
+    let r = BLOCK / 2;
+    let (x, y) = (x as i32, y as i32);
+    let p = |dx: i32, dy: i32| img.clamped(dx, dy) as i32;
+    let (mut a, mut b, mut c) = (0i32, 0i32, 0i32);
+    for by in y - r..=y + r {
+        for bx in x - r..=x + r {
+            let ix = (p(bx + 1, by) - p(bx - 1, by)) * 2 + (p(bx + 1, by - 1) - p(bx - 1, by - 1))
+                + (p(bx + 1, by + 1) - p(bx - 1, by + 1));
+            let iy = (p(bx, by + 1) - p(bx, by - 1)) * 2 + (p(bx - 1, by + 1) - p(bx - 1, by - 1))
+                + (p(bx + 1, by + 1) - p(bx + 1, by - 1));
+            a += ix * ix;
+            b += iy * iy;
+            c += ix * iy;
+        }
+    }
+    (a, b, c)
+}
+
+/// OpenCV's Harris response from the integer sums, with its scaling.
+#[inline]
+pub fn harris_from_sums(a: i32, b: i32, c: i32) -> f32 {
+    let scale = 1.0f32 / ((1 << 2) as f32 * BLOCK as f32 * 255.0);
+    let scale_sq_sq = scale * scale * scale * scale;
+    let (a, b, c) = (a as f32, b as f32, c as f32);
+    (a * b - c * c - HARRIS_K * (a + b) * (a + b)) * scale_sq_sq
+}
+
+/// Harris response at (x, y).
+///
+/// ```
+/// let flat = lfast::Plane::from_vec(9, 9, vec![100u8; 81]).unwrap();
+/// assert_eq!(lfast::cpu::response::harris(&flat, 4, 4), 0.0);
+/// ```
+pub fn harris(img: &Plane<u8>, x: u32, y: u32) -> f32 {
+    let (a, b, c) = structure_sums(img, x, y);
+    harris_from_sums(a, b, c)
+}
+
+/// Responses of all candidates.
+pub fn responses(img: &Plane<u8>, cands: &[[u32; 2]]) -> Vec<f32> {
+    use rayon::prelude::*;
+    cands.par_iter().map(|&[x, y]| harris(img, x, y)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn corner_beats_edge_beats_flat() {
+        // bright quadrant x >= 10, y >= 10 in a 21x21 image
+        let img = Plane::from_vec(21, 21, (0..441).map(|i| if i % 21 >= 10 && i / 21 >= 10 { 200 } else { 20 }).collect()).unwrap();
+        let corner = harris(&img, 10, 10);
+        let edge = harris(&img, 10, 16); // on the vertical edge, away from the corner
+        let flat = harris(&img, 3, 3);
+        assert!(corner > 0.0);
+        assert!(edge < 0.0, "an edge has a negative Harris score, got {edge}");
+        assert_eq!(flat, 0.0);
+    }
+
+    #[test]
+    fn sums_by_hand() {
+        // A vertical step of 10 at columns 4|5 in a 9x9 image: at (4,4) the 7x7
+        // block's columns 4 and 5 see Ix = (10-0)*2 + 10 + 10 = 40, others 0.
+        let img = Plane::from_vec(9, 9, (0..81).map(|i| if i % 9 >= 5 { 10 } else { 0 }).collect()).unwrap();
+        let (a, b, c) = structure_sums(&img, 4, 4);
+        assert_eq!((a, b, c), (2 * 7 * 40 * 40, 0, 0));
+    }
+}

@@ -1,0 +1,84 @@
+//! The crate's typed error. Every fallible public function returns [`Result`].
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in lfast, each variant naming what was wrong.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A configuration value is out of its valid range.
+    #[error("invalid config: `{field}` {reason}")]
+    InvalidConfig {
+        /// The name of the field, as spelled in the TOML file.
+        field: &'static str,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A configuration file could not be parsed.
+    #[error("config file {path}: {message}")]
+    ConfigParse {
+        /// The file.
+        path: PathBuf,
+        /// The parser's message.
+        message: String,
+    },
+    /// The image cannot be processed (empty, too large, inconsistent buffer).
+    #[error("invalid image ({width}x{height}): {reason}")]
+    InvalidImage {
+        /// Width as given.
+        width: u32,
+        /// Height as given.
+        height: u32,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The mask does not have the image's size.
+    #[error("mask is {mask_width}x{mask_height} but the image is {width}x{height}")]
+    MaskSize {
+        /// Mask width.
+        mask_width: u32,
+        /// Mask height.
+        mask_height: u32,
+        /// Image width.
+        width: u32,
+        /// Image height.
+        height: u32,
+    },
+    /// A caller-supplied keypoint cannot be described.
+    #[error("keypoint {index}: {reason}")]
+    InvalidKeypoint {
+        /// Index in the slice that was passed.
+        index: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Decoding or encoding an image file failed.
+    #[error("{path}: {source}")]
+    Image {
+        /// The file.
+        path: PathBuf,
+        /// The codec's error.
+        #[source]
+        source: image::ImageError,
+    },
+    /// The ORB pattern table is malformed.
+    #[error("ORB pattern, line {line}: {reason}")]
+    Pattern {
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
+}
+
+/// `Result` with the crate's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

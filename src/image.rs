@@ -1,0 +1,230 @@
+//! Plain image types shared by every stage, and the SPEC 0 input conversion.
+//!
+//! Stages work on [`Plane<T>`]: a dense row-major `width x height` array, the
+//! same layout a GPU storage buffer has. Callers hand in a [`GrayView`], which
+//! borrows any 8-bit buffer with a row stride (a camera frame, an
+//! `image::GrayImage`) without copying.
+
+use crate::error::{Error, Result};
+use std::path::Path;
+
+/// Largest accepted width or height. Keeps every integer stage (Otsu's
+/// exact comparison in particular) inside its proven range; see docs/algorithm.md.
+pub const MAX_SIDE: u32 = 16384;
+
+/// A dense row-major image of `T`, `data.len() == width * height`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Plane<T> {
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Pixels, row after row.
+    pub data: Vec<T>,
+}
+
+impl<T: Copy + Default> Plane<T> {
+    /// A plane filled with `T::default()`.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self { width, height, data: vec![T::default(); width as usize * height as usize] }
+    }
+}
+
+impl<T: Copy> Plane<T> {
+    /// Wraps `data`; fails when its length is not `width * height`.
+    pub fn from_vec(width: u32, height: u32, data: Vec<T>) -> Result<Self> {
+        if data.len() != width as usize * height as usize {
+            return Err(Error::InvalidImage {
+                width,
+                height,
+                reason: format!("buffer has {} elements, expected {}", data.len(), width as usize * height as usize),
+            });
+        }
+        Ok(Self { width, height, data })
+    }
+
+    /// Pixel at (x, y); panics out of range (internal use with checked indices).
+    #[inline(always)]
+    pub fn at(&self, x: u32, y: u32) -> T {
+        self.data[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Pixel at (x, y) with coordinates clamped into the image (replicate border).
+    #[inline(always)]
+    pub fn clamped(&self, x: i32, y: i32) -> T {
+        let x = x.clamp(0, self.width as i32 - 1) as usize;
+        let y = y.clamp(0, self.height as i32 - 1) as usize;
+        self.data[y * self.width as usize + x]
+    }
+
+    /// Row `y` as a slice.
+    #[inline(always)]
+    pub fn row(&self, y: u32) -> &[T] {
+        let w = self.width as usize;
+        &self.data[y as usize * w..(y as usize + 1) * w]
+    }
+
+    /// A borrowed view (8-bit planes only are views; see [`GrayView`]).
+    pub fn len(&self) -> usize {
+        self.data.len()
+    }
+
+    /// True for a 0-pixel plane.
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+}
+
+impl Plane<u8> {
+    /// Borrow as a [`GrayView`].
+    pub fn view(&self) -> GrayView<'_> {
+        GrayView { width: self.width, height: self.height, stride: self.width as usize, data: &self.data }
+    }
+}
+
+/// A borrowed 8-bit gray image with a row stride in bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct GrayView<'a> {
+    width: u32,
+    height: u32,
+    stride: usize,
+    data: &'a [u8],
+}
+
+impl<'a> GrayView<'a> {
+    /// Checks that `data` holds `height` rows of `stride >= width` bytes (the
+    /// last row may be just `width` long) and that the size is within limits.
+    pub fn new(width: u32, height: u32, stride: usize, data: &'a [u8]) -> Result<Self> {
+        check_size(width, height)?;
+        if stride < width as usize {
+            return Err(Error::InvalidImage { width, height, reason: format!("row stride {stride} is less than the width") });
+        }
+        let need = stride * (height as usize - 1) + width as usize;
+        if data.len() < need {
+            return Err(Error::InvalidImage {
+                width,
+                height,
+                reason: format!("buffer has {} bytes, {need} needed for stride {stride}", data.len()),
+            });
+        }
+        Ok(Self { width, height, stride, data })
+    }
+
+    /// Columns.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+    /// Rows.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+    /// Row `y`, `width` bytes.
+    pub fn row(&self, y: u32) -> &'a [u8] {
+        let s = y as usize * self.stride;
+        &self.data[s..s + self.width as usize]
+    }
+    /// A dense copy.
+    pub fn to_plane(&self) -> Plane<u8> {
+        if self.stride == self.width as usize {
+            let n = self.width as usize * self.height as usize;
+            return Plane { width: self.width, height: self.height, data: self.data[..n].to_vec() };
+        }
+        let mut data = Vec::with_capacity(self.width as usize * self.height as usize);
+        for y in 0..self.height {
+            data.extend_from_slice(self.row(y));
+        }
+        Plane { width: self.width, height: self.height, data }
+    }
+}
+
+impl<'a> From<&'a image::GrayImage> for GrayView<'a> {
+    fn from(img: &'a image::GrayImage) -> Self {
+        let (w, h) = img.dimensions();
+        GrayView { width: w, height: h, stride: w as usize, data: img.as_raw() }
+    }
+}
+
+impl<'a> From<&'a Plane<u8>> for GrayView<'a> {
+    fn from(p: &'a Plane<u8>) -> Self {
+        p.view()
+    }
+}
+
+/// Fails for an empty image or one larger than [`MAX_SIDE`] on a side.
+pub fn check_size(width: u32, height: u32) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(Error::InvalidImage { width, height, reason: "the image is empty".into() });
+    }
+    if width > MAX_SIDE || height > MAX_SIDE {
+        return Err(Error::InvalidImage { width, height, reason: format!("a side exceeds the limit of {MAX_SIDE} pixels") });
+    }
+    Ok(())
+}
+
+/// OpenCV's integer BT.601 luma (SPEC 0).
+///
+/// ```
+/// assert_eq!(lfast::image::luma_bt601(255, 255, 255), 255);
+/// assert_eq!(lfast::image::luma_bt601(255, 0, 0), 76);
+/// ```
+#[inline]
+pub fn luma_bt601(r: u8, g: u8, b: u8) -> u8 {
+    ((4899 * r as u32 + 9617 * g as u32 + 1868 * b as u32 + 8192) >> 14) as u8
+}
+
+/// Converts any decoded image to 8-bit gray as SPEC 0 says: colour by
+/// [`luma_bt601`], 16-bit by `v >> 8` (per channel, before luma), alpha ignored.
+/// Float images are clamped to [0, 1] and scaled by 255 with rounding.
+pub fn to_gray(img: &image::DynamicImage) -> Result<Plane<u8>> {
+    use image::DynamicImage as D;
+    let (w, h) = (img.width(), img.height());
+    check_size(w, h)?;
+    let data: Vec<u8> = match img {
+        D::ImageLuma8(b) => b.as_raw().clone(),
+        D::ImageLumaA8(b) => b.pixels().map(|p| p.0[0]).collect(),
+        D::ImageRgb8(b) => b.pixels().map(|p| luma_bt601(p.0[0], p.0[1], p.0[2])).collect(),
+        D::ImageRgba8(b) => b.pixels().map(|p| luma_bt601(p.0[0], p.0[1], p.0[2])).collect(),
+        D::ImageLuma16(b) => b.pixels().map(|p| (p.0[0] >> 8) as u8).collect(),
+        D::ImageLumaA16(b) => b.pixels().map(|p| (p.0[0] >> 8) as u8).collect(),
+        D::ImageRgb16(b) => {
+            b.pixels().map(|p| luma_bt601((p.0[0] >> 8) as u8, (p.0[1] >> 8) as u8, (p.0[2] >> 8) as u8)).collect()
+        }
+        D::ImageRgba16(b) => {
+            b.pixels().map(|p| luma_bt601((p.0[0] >> 8) as u8, (p.0[1] >> 8) as u8, (p.0[2] >> 8) as u8)).collect()
+        }
+        other => {
+            let rgb = other.to_rgb32f();
+            let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+            rgb.pixels().map(|p| luma_bt601(q(p.0[0]), q(p.0[1]), q(p.0[2]))).collect()
+        }
+    };
+    Plane::from_vec(w, h, data)
+}
+
+/// Decoding limits for files: no side over [`MAX_SIDE`], at most 1 GiB allocated,
+/// so a crafted header cannot make the decoder allocate gigabytes.
+pub fn decode_limits() -> image::Limits {
+    let mut l = image::Limits::default();
+    l.max_image_width = Some(MAX_SIDE);
+    l.max_image_height = Some(MAX_SIDE);
+    l.max_alloc = Some(1 << 30);
+    l
+}
+
+/// Reads an image file and converts it to gray (SPEC 0), with [`decode_limits`].
+pub fn load_gray(path: impl AsRef<Path>) -> Result<Plane<u8>> {
+    let path = path.as_ref();
+    let io = |source| Error::Io { path: path.to_path_buf(), source };
+    let img_err = |source| Error::Image { path: path.to_path_buf(), source };
+    let mut reader = image::ImageReader::open(path).map_err(io)?.with_guessed_format().map_err(io)?;
+    reader.limits(decode_limits());
+    let img = reader.decode().map_err(img_err)?;
+    to_gray(&img)
+}
+
+/// Writes an 8-bit plane as a PNG.
+pub fn save_gray(plane: &Plane<u8>, path: impl AsRef<Path>) -> Result<()> {
+    let path = path.as_ref();
+    image::save_buffer(path, &plane.data, plane.width, plane.height, image::ExtendedColorType::L8)
+        .map_err(|source| Error::Image { path: path.to_path_buf(), source })
+}

@@ -1,0 +1,21 @@
+//! # lfast — the L-FAST feature detector
+//!
+//! An improved adaptive Canny edge detector, a corner test on its edge map
+//! (L-FAST), ORB descriptors and an image pyramid, after Lu et al., Sensors
+//! 2022, 22(19) 7127, with every open choice fixed by SPEC.md and
+//! docs/algorithm.md. This crate's CPU path ([`cpu`]) is the reference the GPU
+//! passes are checked against bit for bit.
+#![warn(missing_docs)]
+
+pub mod baseline;
+pub mod config;
+pub mod cpu;
+pub mod error;
+pub mod image;
+pub mod io;
+mod keypoint;
+
+pub use config::{Config, Mode};
+pub use error::{Error, Result};
+pub use image::{GrayView, Plane};
+pub use keypoint::{Descriptor, KeyPoint, hamming};
