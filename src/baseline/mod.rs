@@ -1,0 +1,4 @@
+//! Baselines of SPEC 12 behind the crate's types: traditional Canny, FAST-9 and ORB.
+
+pub mod fast;
+pub mod canny;
