@@ -157,7 +157,7 @@ impl CpuDetector {
     /// [`mask_radius`](Self::mask_radius) of an "off" pixel, at any level.
     pub fn detect(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<Vec<KeyPoint>> {
         let (levels, corners) = self.find(image, mask)?;
-        Ok(corners.iter().map(|c| self.keypoint(&levels, c).0).collect())
+        Ok(corners.iter().map(|c| self.keypoint(&levels, c, 0.5).0).collect())
     }
 
     /// Keypoints and their descriptors (SPEC 1-11); `desc[i]` belongs to `kps[i]`.
@@ -167,14 +167,26 @@ impl CpuDetector {
         mask: Option<GrayView<'_>>,
     ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
         let (levels, corners) = self.find(image, mask)?;
-        let smoothed = smooth_used_levels(&levels, corners.iter().map(|c| c.level));
-        Ok(corners
+        Ok(self.describe_corners(&levels, &corners, 0.5))
+    }
+
+    /// Keypoints (SPEC 10, 11) and descriptors of corners found on `levels`.
+    /// `centre` is where a pixel's position lies within it: 0.5 for L-FAST
+    /// corners (they sit on the gradient grid), 0 for FAST/ORB as OpenCV reports.
+    pub(crate) fn describe_corners(
+        &self,
+        levels: &[Plane<u8>],
+        corners: &[Corner],
+        centre: f64,
+    ) -> (Vec<KeyPoint>, Vec<Descriptor>) {
+        let smoothed = smooth_used_levels(levels, corners.iter().map(|c| c.level));
+        corners
             .par_iter()
             .map(|c| {
-                let (kp, bin) = self.keypoint(&levels, c);
+                let (kp, bin) = self.keypoint(levels, c, centre);
                 (kp, self.describe(&smoothed[c.level as usize], c.x, c.y, kp.angle, bin))
             })
-            .unzip())
+            .unzip()
     }
 
     /// Descriptors of caller-supplied keypoints (from any detector). A keypoint
@@ -208,7 +220,7 @@ impl CpuDetector {
         Ok(at
             .par_iter()
             .map(|c| {
-                let (kp, bin) = self.keypoint(&levels, c);
+                let (kp, bin) = self.keypoint(&levels, c, 0.5);
                 self.describe(&smoothed[c.level as usize], c.x, c.y, kp.angle, bin)
             })
             .collect())
@@ -255,12 +267,12 @@ impl CpuDetector {
     }
 
     /// The keypoint of a corner (SPEC 10) with its angle, and its orientation bin.
-    fn keypoint(&self, levels: &[Plane<u8>], c: &Corner) -> (KeyPoint, u32) {
+    fn keypoint(&self, levels: &[Plane<u8>], c: &Corner, centre: f64) -> (KeyPoint, u32) {
         let s = self.cfg.level_scale(c.level);
         let (m10, m01) = orientation::moments(&levels[c.level as usize], c.x, c.y);
         let bin = self.rotated.as_ref().map_or(0, |r| r.bins.bin_of(m10, m01));
         let kp = KeyPoint {
-            pt: glam::Vec2::new(((c.x as f64 + 0.5) * s) as f32, ((c.y as f64 + 0.5) * s) as f32),
+            pt: glam::Vec2::new(((c.x as f64 + centre) * s) as f32, ((c.y as f64 + centre) * s) as f32),
             size: (31.0 * s) as f32,
             angle: orientation::angle_deg(m10, m01),
             response: c.response,
