@@ -3,6 +3,7 @@
 //! sigma 2 kernel before sampling descriptors. Mirrors shaders/blur.wgsl.
 
 use crate::image::Plane;
+use super::simd::dispatch;
 use rayon::prelude::*;
 
 /// Q8 weights of a `ksize`-tap Gaussian with `sigma`, summing exactly to 256:
@@ -38,31 +39,103 @@ pub fn reflect101(i: i32, len: i32) -> usize {
     i as usize
 }
 
-/// Separable blur: horizontal pass to Q8 u32, vertical pass to Q16, rounded.
+/// Separable blur: horizontal pass to Q8, vertical pass to Q16, rounded:
+/// `out = (sum_y w_y * sum_x w_x * p + 2^15) >> 16`, BORDER_REFLECT_101.
+/// The horizontal sums fit u16 because the weights sum to 256.
 pub fn gaussian_blur(src: &Plane<u8>, kernel: &[u32]) -> Plane<u8> {
-    let (w, h) = (src.width as usize, src.height as usize);
-    let r = (kernel.len() / 2) as i32;
-    let mut tmp = vec![0u32; w * h];
-    tmp.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        let s = src.row(y as u32);
-        for (x, o) in row.iter_mut().enumerate() {
-            let mut acc = 0u32;
-            for (k, &wk) in kernel.iter().enumerate() {
-                acc += wk * s[reflect101(x as i32 + k as i32 - r, w as i32)] as u32;
+    match kernel.len() {
+        7 => blur_n::<7>(src, kernel.try_into().expect("length checked")),
+        5 => blur_n::<5>(src, kernel.try_into().expect("length checked")),
+        3 => blur_n::<3>(src, kernel.try_into().expect("length checked")),
+        _ => blur_any(src, kernel),
+    }
+}
+
+dispatch! {
+    /// Horizontal taps over the interior of a row: `out[x] = sum_k k[k] * s[x + k]`.
+    fn hrow7(s: &[u8], k: &[u16; 7], out: &mut [u16]) {
+        for (x, o) in out.iter_mut().enumerate() {
+            let mut acc = 0u16;
+            for (i, &kw) in k.iter().enumerate() {
+                acc += kw * s[x + i] as u16;
             }
             *o = acc;
         }
-    });
-    let mut out = Plane::<u8>::new(src.width, src.height);
-    out.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        for (x, o) in row.iter_mut().enumerate() {
-            let mut acc = 0u32;
-            for (k, &wk) in kernel.iter().enumerate() {
-                acc += wk * tmp[reflect101(y as i32 + k as i32 - r, h as i32) * w + x];
+    }
+}
+
+dispatch! {
+    /// One weighted row of the vertical pass: `acc[x] += k * t[x]`.
+    fn vacc(t: &[u16], k: u32, acc: &mut [u32]) {
+        let acc = &mut acc[..t.len()];
+        for (a, &v) in acc.iter_mut().zip(t) {
+            *a += k * v as u32;
+        }
+    }
+}
+
+dispatch! {
+    /// Rounds the Q16 sums to bytes.
+    fn vround(acc: &[u32], out: &mut [u8]) {
+        for (o, &a) in out.iter_mut().zip(acc) {
+            *o = ((a + (1 << 15)) >> 16) as u8;
+        }
+    }
+}
+
+fn blur_n<const N: usize>(src: &Plane<u8>, kernel: &[u32; N]) -> Plane<u8> {
+    let (w, h) = (src.width as usize, src.height as usize);
+    let r = N / 2;
+    let k16: [u16; N] = kernel.map(|v| v as u16);
+    let mut tmp = vec![0u16; w * h];
+    tmp.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let s = src.row(y as u32);
+        let tap = |x: usize| kernel.iter().enumerate().map(|(i, &k)| k as u16 * s[reflect101(x as i32 + i as i32 - r as i32, w as i32)] as u16).sum::<u16>();
+        if w > 2 * r && N == 7 {
+            let k7: &[u16; 7] = k16.as_slice().try_into().expect("N == 7");
+            hrow7(s, k7, &mut row[r..w - r]);
+            for x in (0..r).chain(w - r..w) {
+                row[x] = tap(x);
             }
-            *o = ((acc + (1 << 15)) >> 16) as u8;
+        } else {
+            for (x, o) in row.iter_mut().enumerate() {
+                *o = tap(x);
+            }
         }
     });
+    let mut out = Plane::<u8>::new(src.width, src.height);
+    out.data.par_chunks_mut(w).enumerate().for_each_init(
+        || vec![0u32; w],
+        |acc, (y, row)| {
+            acc.fill(0);
+            for (i, &k) in kernel.iter().enumerate() {
+                let yy = reflect101(y as i32 + i as i32 - r as i32, h as i32);
+                vacc(&tmp[yy * w..(yy + 1) * w], k, acc);
+            }
+            vround(acc, row);
+        },
+    );
+    out
+}
+
+/// Any kernel length, straightforward loops (the reference for the fast paths).
+fn blur_any(src: &Plane<u8>, kernel: &[u32]) -> Plane<u8> {
+    let (w, h) = (src.width as usize, src.height as usize);
+    let r = (kernel.len() / 2) as i32;
+    let mut tmp = vec![0u32; w * h];
+    for y in 0..h {
+        let s = src.row(y as u32);
+        for x in 0..w {
+            tmp[y * w + x] = kernel.iter().enumerate().map(|(k, &wk)| wk * s[reflect101(x as i32 + k as i32 - r, w as i32)] as u32).sum();
+        }
+    }
+    let mut out = Plane::<u8>::new(src.width, src.height);
+    for y in 0..h {
+        for x in 0..w {
+            let acc: u32 = kernel.iter().enumerate().map(|(k, &wk)| wk * tmp[reflect101(y as i32 + k as i32 - r, h as i32) * w + x]).sum();
+            out.data[y * w + x] = ((acc + (1 << 15)) >> 16) as u8;
+        }
+    }
     out
 }
 
@@ -77,6 +150,17 @@ mod tests {
         let k5 = gaussian_kernel_q8(5, 0.8);
         assert_eq!(k5.iter().sum::<u32>(), 256);
         assert_eq!(k5, k5.iter().rev().copied().collect::<Vec<_>>());
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn fast_paths_match_reference(w in 1u32..40, h in 1u32..20, seed in proptest::prelude::any::<u64>(), ks in 0usize..3) {
+            let mut s = seed;
+            let data: Vec<u8> = (0..w * h).map(|_| { s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407); (s >> 56) as u8 }).collect();
+            let img = Plane::from_vec(w, h, data).unwrap();
+            let k = [gaussian_kernel_q8(3, 0.7), gaussian_kernel_q8(5, 0.8), ORB_KERNEL.to_vec()][ks].clone();
+            proptest::prop_assert_eq!(gaussian_blur(&img, &k), blur_any(&img, &k));
+        }
     }
 
     #[test]

@@ -16,14 +16,16 @@ use crate::image::Plane;
 /// assert_eq!(hysteresis(&c).data, vec![255, 255, 255, 0, 0]);
 /// ```
 pub fn hysteresis(classes: &Plane<u8>) -> Plane<u8> {
+    let seeds = classes.data.iter().enumerate().filter(|&(_, &c)| c == STRONG).map(|(i, _)| i).collect();
+    flood(classes, seeds)
+}
+
+/// Hysteresis from the given STRONG pixels (linear indices, all of them).
+pub fn flood(classes: &Plane<u8>, mut stack: Vec<usize>) -> Plane<u8> {
     let (w, h) = (classes.width as usize, classes.height as usize);
     let mut out = Plane::<u8>::new(classes.width, classes.height);
-    let mut stack: Vec<usize> = Vec::new();
-    for (i, &c) in classes.data.iter().enumerate() {
-        if c == STRONG {
-            out.data[i] = EDGE;
-            stack.push(i);
-        }
+    for &i in &stack {
+        out.data[i] = EDGE;
     }
     while let Some(i) = stack.pop() {
         let (x, y) = (i % w, i / w);

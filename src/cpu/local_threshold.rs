@@ -119,60 +119,89 @@ fn cuts(origins: &[u32], size: u32, len: u32) -> Vec<u32> {
     c
 }
 
+/// Window layout of a `w x h` image: sizes, origins and the cell cuts.
+#[derive(Clone, Debug)]
+pub(crate) struct Layout {
+    pub a: u32,
+    pub b: u32,
+    pub xs: Vec<u32>,
+    pub ys: Vec<u32>,
+    /// Cell boundaries along x and y (every window edge, plus 0 and the size).
+    pub cx: Vec<u32>,
+    pub cy: Vec<u32>,
+}
+
+impl Layout {
+    pub fn new(w: u32, h: u32) -> Self {
+        let a = (w / 5).max(1);
+        let b = (h / 5).max(1);
+        let xs = window_origins(w, a);
+        let ys = window_origins(h, b);
+        let cx = cuts(&xs, a, w);
+        let cy = cuts(&ys, b, h);
+        Self { a, b, xs, ys, cx, cy }
+    }
+
+    /// Sums the cells' histograms (`cells[j][i]`: cell row j, cell column i)
+    /// into each window's statistics and builds the grid.
+    pub fn grid(self, cells: &[Vec<[u32; 256]>], w: u32, h: u32) -> WindowGrid {
+        let cell_of = |cuts: &[u32], v: u32| cuts.binary_search(&v).expect("window edges are cut points");
+        let mut stats = Vec::with_capacity(self.xs.len() * self.ys.len());
+        for &y0 in &self.ys {
+            let (j0, j1) = (cell_of(&self.cy, y0), cell_of(&self.cy, y0 + self.b));
+            for &x0 in &self.xs {
+                let (i0, i1) = (cell_of(&self.cx, x0), cell_of(&self.cx, x0 + self.a));
+                let mut hist = [0u32; 256];
+                for band in &cells[j0..j1] {
+                    for cell in &band[i0..i1] {
+                        for (acc, &c) in hist.iter_mut().zip(cell.iter()) {
+                            *acc += c;
+                        }
+                    }
+                }
+                stats.push(stats_of(&hist));
+            }
+        }
+        WindowGrid {
+            col_window: nearest_windows(&self.xs, self.a, w),
+            row_window: nearest_windows(&self.ys, self.b, h),
+            a: self.a,
+            b: self.b,
+            xs: self.xs,
+            ys: self.ys,
+            stats,
+        }
+    }
+}
+
+/// Adds one row of M8 values to the histograms of the cells it crosses.
+#[inline]
+pub(crate) fn add_row(band: &mut [[u32; 256]], cx: &[u32], m8: impl Fn(usize) -> u8) {
+    for (i, hist) in band.iter_mut().enumerate() {
+        for x in cx[i] as usize..cx[i + 1] as usize {
+            hist[m8(x) as usize] += 1;
+        }
+    }
+}
+
 /// Window statistics of `M8 = min(M, 255)` (SPEC 5).
 pub fn local_threshold(m: &Plane<u16>) -> WindowGrid {
     let (w, h) = (m.width, m.height);
-    let a = (w / 5).max(1);
-    let b = (h / 5).max(1);
-    let xs = window_origins(w, a);
-    let ys = window_origins(h, b);
-    let cx = cuts(&xs, a, w);
-    let cy = cuts(&ys, b, h);
-    let (ncx, ncy) = (cx.len() - 1, cy.len() - 1);
-
+    let layout = Layout::new(w, h);
+    let (cx, cy) = (&layout.cx, &layout.cy);
     // One histogram per cell, one band of cells per task.
-    let cells: Vec<Vec<[u32; 256]>> = (0..ncy)
+    let cells: Vec<Vec<[u32; 256]>> = (0..cy.len() - 1)
         .into_par_iter()
         .map(|j| {
-            let mut band = vec![[0u32; 256]; ncx];
+            let mut band = vec![[0u32; 256]; cx.len() - 1];
             for y in cy[j]..cy[j + 1] {
                 let row = m.row(y);
-                for (i, hist) in band.iter_mut().enumerate() {
-                    for &v in &row[cx[i] as usize..cx[i + 1] as usize] {
-                        hist[v.min(255) as usize] += 1;
-                    }
-                }
+                add_row(&mut band, cx, |x| row[x].min(255) as u8);
             }
             band
         })
         .collect();
-
-    let cell_of = |cuts: &[u32], v: u32| cuts.binary_search(&v).expect("window edges are cut points");
-    let mut stats = Vec::with_capacity(xs.len() * ys.len());
-    for &y0 in &ys {
-        let (j0, j1) = (cell_of(&cy, y0), cell_of(&cy, y0 + b));
-        for &x0 in &xs {
-            let (i0, i1) = (cell_of(&cx, x0), cell_of(&cx, x0 + a));
-            let mut hist = [0u32; 256];
-            for band in &cells[j0..j1] {
-                for cell in &band[i0..i1] {
-                    for (acc, &c) in hist.iter_mut().zip(cell.iter()) {
-                        *acc += c;
-                    }
-                }
-            }
-            stats.push(stats_of(&hist));
-        }
-    }
-    WindowGrid {
-        a,
-        b,
-        col_window: nearest_windows(&xs, a, w),
-        row_window: nearest_windows(&ys, b, h),
-        xs,
-        ys,
-        stats,
-    }
+    layout.grid(&cells, w, h)
 }
 
 #[cfg(test)]

@@ -8,6 +8,7 @@
 pub mod blur;
 pub mod classify;
 pub mod corner_nms;
+pub mod fused;
 pub mod gradient;
 pub mod histogram;
 pub mod hysteresis;
@@ -22,6 +23,7 @@ pub mod pyramid;
 pub mod response;
 pub mod rules;
 pub mod select;
+mod simd;
 
 use crate::config::{Config, DELTA_DEN};
 use crate::error::{Error, Result};
@@ -92,13 +94,18 @@ impl EdgeMap {
 /// assert_eq!(em.edges.at(16, 16), 0); // inside the flat square
 /// ```
 pub fn edge_map(img: &Plane<u8>, cfg: &Config) -> EdgeMap {
-    let denoised = median::median(img, cfg.delta_num(), DELTA_DEN);
+    edge_map_with(img, cfg.delta_num(), DELTA_DEN, cfg.alpha_pct)
+}
+
+/// [`edge_map`] with the two parameters it reads given directly.
+pub fn edge_map_with(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u32) -> EdgeMap {
+    let denoised = median::median(img, delta_num, delta_den);
     let gradient = gradient::gradient(&denoised);
     let nms = nms::nms(&gradient);
     let histogram = histogram::histogram(&gradient.m);
     let otsu_k = otsu::otsu(&histogram);
     let windows = local_threshold::local_threshold(&gradient.m);
-    let classes = classify::classify(&gradient.m, &nms, otsu_k.map(|k| k as u32 + 1), &windows, cfg.alpha_pct);
+    let classes = classify::classify(&gradient.m, &nms, otsu_k.map(|k| k as u32 + 1), &windows, alpha_pct);
     let ruled = rules::rules(&classes);
     let edges = hysteresis::hysteresis(&ruled);
     EdgeMap { denoised, gradient, nms, histogram, otsu_k, windows, classes, ruled, edges }
@@ -253,7 +260,7 @@ impl CpuDetector {
                 if img.width <= 2 * b || img.height <= 2 * b {
                     return Vec::new();
                 }
-                let em = edge_map(img, &self.cfg);
+                let em = fused::edges_fused(img, self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct);
                 let cands = lfast::lfast(&em.edges, masks.as_ref().map(|m| &m[l]), &params);
                 let resp = response::responses(&em.denoised, &cands);
                 corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)

@@ -102,11 +102,27 @@ impl RotatedPatterns {
     }
 }
 
+/// No rotated offset exceeds this (|x|, |y| <= 15 rotated stay within 15 * sqrt(2)).
+const REACH: i32 = 22;
+
 /// The descriptor at (x, y) of the smoothed image with a (rotated) table:
 /// bit i of byte j is set iff `I(a) < I(b)` for pair `8*j + i`, reads clamped.
 pub fn describe(smoothed: &Plane<u8>, x: u32, y: u32, table: &[Pair]) -> Descriptor {
     let (x, y) = (x as i32, y as i32);
     let mut d = [0u8; 32];
+    let (w, h) = (smoothed.width as i32, smoothed.height as i32);
+    if x >= REACH && y >= REACH && x + REACH < w && y + REACH < h {
+        // every sample is inside: read by linear offset, no clamping
+        let c = (y * w + x) as isize;
+        let px = |dx: i8, dy: i8| smoothed.data[(c + dy as isize * w as isize + dx as isize) as usize];
+        for (j, byte) in d.iter_mut().enumerate() {
+            for i in 0..8 {
+                let p = table[8 * j + i];
+                *byte |= ((px(p[0], p[1]) < px(p[2], p[3])) as u8) << i;
+            }
+        }
+        return d;
+    }
     for (j, byte) in d.iter_mut().enumerate() {
         for i in 0..8 {
             let p = table[8 * j + i];
@@ -180,6 +196,31 @@ mod tests {
         img.data[(20 + 9) * 41 + 20 - 5] = 200;
         let d = describe(&img, 20, 20, &r);
         assert_eq!(d[0] & 1, 1);
+    }
+
+    #[test]
+    fn border_and_interior_paths_agree() {
+        // the same patch content seen at an interior point and through clamped reads
+        let img = Plane::from_vec(80, 80, (0..6400u32).map(|i| (i.wrapping_mul(2654435761) >> 24) as u8).collect()).unwrap();
+        let rp = RotatedPatterns::new(Pattern::orb(), 30);
+        for t in &rp.tables {
+            assert!(t.iter().all(|p| p.iter().all(|&c| (c as i32).abs() <= REACH)));
+        }
+        for (x, y) in [(40, 40), (22, 22), (57, 57), (21, 40), (40, 58), (0, 0), (79, 79)] {
+            let clamped = {
+                let mut d = [0u8; 32];
+                for (j, byte) in d.iter_mut().enumerate() {
+                    for i in 0..8 {
+                        let p = rp.tables[7][8 * j + i];
+                        let a = img.clamped(x + p[0] as i32, y + p[1] as i32);
+                        let b = img.clamped(x + p[2] as i32, y + p[3] as i32);
+                        *byte |= ((a < b) as u8) << i;
+                    }
+                }
+                d
+            };
+            assert_eq!(describe(&img, x as u32, y as u32, &rp.tables[7]), clamped, "({x}, {y})");
+        }
     }
 
     #[test]

@@ -37,19 +37,24 @@ pub fn rules(classes: &Plane<u8>) -> Plane<u8> {
     out.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         let y = y as u32;
         for (x, o) in row.iter_mut().enumerate() {
-            let x = x as u32;
-            *o = match classes.at(x, y) {
-                WEAK_STRONG => {
-                    if has_neighbour(classes, x, y, WEAK_STRONG) { STRONG } else { WEAK }
-                }
-                WEAK_WEAK => {
-                    if has_neighbour(classes, x, y, WEAK_WEAK) { NONE } else { WEAK }
-                }
-                c => c,
-            };
+            *o = rule_at(classes, x as u32, y);
         }
     });
     out
+}
+
+/// The class of (x, y) after rules 1 and 2.
+#[inline]
+pub fn rule_at(classes: &Plane<u8>, x: u32, y: u32) -> u8 {
+    match classes.at(x, y) {
+        WEAK_STRONG => {
+            if has_neighbour(classes, x, y, WEAK_STRONG) { STRONG } else { WEAK }
+        }
+        WEAK_WEAK => {
+            if has_neighbour(classes, x, y, WEAK_WEAK) { NONE } else { WEAK }
+        }
+        c => c,
+    }
 }
 
 #[cfg(test)]

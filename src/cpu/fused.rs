@@ -1,0 +1,373 @@
+//! The fast path of SPEC 1-7 that detection uses: the same function as the
+//! staged modules (median -> ... -> hysteresis), computed in four row-parallel
+//! passes with vectorisable row kernels instead of nine full-image stages.
+//! `tests` and the golden files check that it is bit-identical to [`edge_map`](super::edge_map).
+//!
+//! 1. median rows -> D
+//! 2. per cell row: LSD gradient rows -> S, direction sector, M8 + cell histograms
+//! 3. Otsu and window statistics from the cell histograms (tiny), turned into
+//!    four integer thresholds per column: M >= hi is STRONG, >= lo WEAK_STRONG, ...
+//! 4. NMS + classification rows -> classes
+//! 5. rules rows -> ruled classes, STRONG seeds; flood fill -> E
+
+use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
+use super::local_threshold::{Layout, add_row};
+use super::simd::dispatch;
+use super::{hysteresis, median, rules};
+use crate::image::Plane;
+use rayon::prelude::*;
+
+/// D and E of one image.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FastEdges {
+    /// The flagged-median output (SPEC 1).
+    pub denoised: Plane<u8>,
+    /// The edge map (SPEC 7): 255 on edges.
+    pub edges: Plane<u8>,
+}
+
+/// `isqrt(s)` for `s <= 2 * 510^2`: f32 holds s exactly and the correctly
+/// rounded square root never reaches the next integer below 2^20 (tested
+/// over the whole range), and it vectorises.
+#[inline(always)]
+pub fn sqrt_floor(s: u32) -> u32 {
+    // `as i32` then `as u32`: the value is finite and below 2^20, and the
+    // signed conversion is a single vector instruction.
+    (s as i32 as f32).sqrt() as i32 as u32
+}
+
+/// SPEC 3's sector as a code: 0 horizontal, 1 vertical, 2 diagonal with equal
+/// signs, 3 diagonal with opposite signs.
+#[inline(always)]
+fn sector_code(dx: i32, dy: i32) -> u8 {
+    let ax = dx.unsigned_abs();
+    let ay = dy.unsigned_abs();
+    let horizontal = (ay * 32768 < 13573 * ax) as u8;
+    let vertical = (ay * 32768 > 79109 * ax) as u8;
+    let opposite = ((dx > 0) != (dy > 0)) as u8;
+    let diagonal = 1 - (horizontal | vertical);
+    vertical + diagonal * (2 + opposite)
+}
+
+dispatch! {
+    /// Interior of one median row: copies `mid` and flags noise pixels (x in 1..w-1).
+    fn median_row(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: u32, den: u32) {
+        let w = mid.len();
+        let (up, down, out, flags) = (&up[..w], &down[..w], &mut out[..w], &mut flags[..w]);
+        for x in 1..w - 1 {
+            let g = mid[x] as u32;
+            let lim = num * g;
+            let d = |n: u8| den * (g as i32 - n as i32).unsigned_abs() > lim;
+            flags[x] = (d(up[x]) & d(down[x]) & d(mid[x - 1]) & d(mid[x + 1])) as u8;
+            out[x] = mid[x];
+        }
+    }
+}
+
+dispatch! {
+    /// One gradient row from D rows y and y+1 (clamped by the caller).
+    fn gradient_row(r0: &[u8], r1: &[u8], s: &mut [u32], sec: &mut [u8], m8: &mut [u8]) {
+        let w = r0.len();
+        let (r1, s, sec, m8) = (&r1[..w], &mut s[..w], &mut sec[..w], &mut m8[..w]);
+        for x in 0..w - 1 {
+            let (a, b, c, e) = (r0[x] as i32, r0[x + 1] as i32, r1[x] as i32, r1[x + 1] as i32);
+            let dx = b + e - a - c;
+            let dy = c + e - a - b;
+            let sq = (dx * dx + dy * dy) as u32;
+            s[x] = sq;
+            sec[x] = sector_code(dx, dy);
+            m8[x] = (sqrt_floor(sq) >> 1).min(255) as u8;
+        }
+        // last column: x + 1 clamps to x
+        let l = w - 1;
+        let dy = r1[l] as i32 - r0[l] as i32;
+        let dy = 2 * dy;
+        s[l] = (dy * dy) as u32;
+        sec[l] = sector_code(0, dy);
+        m8[l] = (sqrt_floor(s[l]) >> 1).min(255) as u8;
+    }
+}
+
+/// Per-column integer thresholds of one window row: M >= hi is STRONG, else
+/// >= lo WEAK_STRONG, >= whi WEAK, >= wlo WEAK_WEAK (SPEC 6 as integers).
+struct Thresholds {
+    hi: Vec<u16>,
+    lo: Vec<u16>,
+    whi: Vec<u16>,
+    wlo: Vec<u16>,
+}
+
+#[inline(always)]
+fn class_from(m: u16, hi: u16, lo: u16, whi: u16, wlo: u16) -> u8 {
+    if m >= hi {
+        STRONG
+    } else if m >= lo {
+        WEAK_STRONG
+    } else if m >= whi {
+        WEAK
+    } else if m >= wlo {
+        WEAK_WEAK
+    } else {
+        NONE
+    }
+}
+
+/// All-ones when `c`, else 0 (for branch-free selects that vectorise).
+#[inline(always)]
+fn mask(c: bool) -> u32 {
+    0u32.wrapping_sub(c as u32)
+}
+
+dispatch! {
+    /// NMS and classification of the interior of one row (x in 1..w-1).
+    fn classify_row(su: &[u32], s: &[u32], sd: &[u32], sec: &[u8], hi: &[u16], lo: &[u16], whi: &[u16], wlo: &[u16], out: &mut [u8]) {
+        let w = s.len();
+        let (su, sd, sec, out) = (&su[..w], &sd[..w], &sec[..w], &mut out[..w]);
+        let (hi, lo, whi, wlo) = (&hi[..w], &lo[..w], &whi[..w], &wlo[..w]);
+        for x in 1..w - 1 {
+            let v = s[x];
+            let k = sec[x];
+            let (k0, k1, k2, k3) = (mask(k == 0), mask(k == 1), mask(k == 2), mask(k == 3));
+            // neighbours across the gradient: `a` must be beaten, `b` matched
+            let a = (s[x - 1] & k0) | (su[x] & k1) | (su[x - 1] & k2) | (su[x + 1] & k3);
+            let b = (s[x + 1] & k0) | (sd[x] & k1) | (sd[x + 1] & k2) | (sd[x - 1] & k3);
+            let keep = ((v > 0) & (v > a) & (v >= b)) as u8;
+            let m = (sqrt_floor(v) >> 1) as u16;
+            // hi >= lo and whi >= wlo, so first-match is: >= lo ? 3 + (>= hi) : (>= wlo) + (>= whi)
+            let ge_lo = (m >= lo[x]) as u8;
+            let strongish = 3 + (m >= hi[x]) as u8;
+            let weakish = (m >= wlo[x]) as u8 + (m >= whi[x]) as u8;
+            out[x] = keep * (ge_lo * strongish + (1 - ge_lo) * weakish);
+        }
+    }
+}
+
+dispatch! {
+    /// Rules 1 and 2 on the interior of one row (x in 1..w-1).
+    fn rules_row(cu: &[u8], c: &[u8], cd: &[u8], out: &mut [u8]) {
+        let w = c.len();
+        let (cu, cd, out) = (&cu[..w], &cd[..w], &mut out[..w]);
+        for x in 1..w - 1 {
+            let n = [cu[x - 1], cu[x], cu[x + 1], c[x - 1], c[x + 1], cd[x - 1], cd[x], cd[x + 1]];
+            let mut ws = false;
+            let mut ww = false;
+            for v in n {
+                ws |= v == WEAK_STRONG;
+                ww |= v == WEAK_WEAK;
+            }
+            let v = c[x];
+            out[x] = if v == WEAK_STRONG {
+                if ws { STRONG } else { WEAK }
+            } else if v == WEAK_WEAK {
+                if ww { NONE } else { WEAK }
+            } else {
+                v
+            };
+        }
+    }
+}
+
+/// Splits a plane's rows at the given row cuts into mutable bands.
+fn bands<'a, T>(data: &'a mut [T], w: usize, cuts: &[u32]) -> Vec<&'a mut [T]> {
+    let mut rest = data;
+    let mut out = Vec::with_capacity(cuts.len());
+    for k in 0..cuts.len() - 1 {
+        let (band, tail) = rest.split_at_mut((cuts[k + 1] - cuts[k]) as usize * w);
+        out.push(band);
+        rest = tail;
+    }
+    out
+}
+
+/// D and E of `img` (SPEC 1-7), equal to [`edge_map`](super::edge_map)'s.
+pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u32) -> FastEdges {
+    let (w, h) = (img.width as usize, img.height as usize);
+    if w < 3 {
+        // The row kernels need an interior; tiny images take the staged path.
+        let em = super::edge_map_with(img, delta_num, delta_den, alpha_pct);
+        return FastEdges { denoised: em.denoised, edges: em.edges };
+    }
+
+    // 1. median
+    let mut d = Plane::<u8>::new(img.width, img.height);
+    d.data.par_chunks_mut(w).enumerate().for_each_init(
+        || vec![0u8; w],
+        |flags, (y, out)| {
+            let up = img.row(y.saturating_sub(1) as u32);
+            let mid = img.row(y as u32);
+            let down = img.row((y + 1).min(h - 1) as u32);
+            median_row(up, mid, down, out, flags, delta_num, delta_den);
+            for x in [0, w - 1] {
+                out[x] = mid[x];
+                flags[x] = median::is_noise(img, x as u32, y as u32, delta_num, delta_den) as u8;
+            }
+            for (x, f) in flags.iter().enumerate() {
+                if *f != 0 {
+                    out[x] = median::median3x3(img, x as u32, y as u32);
+                }
+            }
+        },
+    );
+
+    // 2. gradient, sector, cell histograms of M8, one cell row per task
+    let layout = Layout::new(img.width, img.height);
+    let mut s = vec![0u32; w * h];
+    let mut sec = vec![0u8; w * h];
+    let (cx, cy) = (&layout.cx, &layout.cy);
+    let cells: Vec<Vec<[u32; 256]>> = bands(&mut s, w, cy)
+        .into_par_iter()
+        .zip(bands(&mut sec, w, cy))
+        .enumerate()
+        .map(|(j, (s_band, sec_band))| {
+            let mut band = vec![[0u32; 256]; cx.len() - 1];
+            let mut m8 = vec![0u8; w];
+            for (k, (s_row, sec_row)) in s_band.chunks_mut(w).zip(sec_band.chunks_mut(w)).enumerate() {
+                let y = cy[j] + k as u32;
+                gradient_row(d.row(y), d.row((y + 1).min(h as u32 - 1)), s_row, sec_row, &mut m8);
+                add_row(&mut band, cx, |x| m8[x]);
+            }
+            band
+        })
+        .collect();
+
+    // 3. Otsu and window statistics -> per-column thresholds per window row
+    let mut hist = [0u32; 256];
+    for cell in cells.iter().flatten() {
+        for (a, &c) in hist.iter_mut().zip(cell) {
+            *a += c;
+        }
+    }
+    let Some(k) = super::otsu::otsu(&hist) else {
+        return FastEdges { denoised: d, edges: Plane::new(img.width, img.height) };
+    };
+    let t1 = k as u32 + 1;
+    let t2 = t1.div_ceil(2); // 2M >= T1  <=>  M >= ceil(T1 / 2)
+    let grid = layout.grid(&cells, img.width, img.height);
+    let nx = grid.xs.len();
+    let thresholds: Vec<Thresholds> = (0..grid.ys.len())
+        .map(|j| {
+            let mut t = Thresholds { hi: vec![0; w], lo: vec![0; w], whi: vec![0; w], wlo: vec![0; w] };
+            for x in 0..w {
+                let v3 = grid.stats[j * nx + grid.col_window[x] as usize].v3();
+                // 300 M >= (100 ± alpha) V3  <=>  M >= ceil((100 ± alpha) V3 / 300)
+                let tl1 = ((100 + alpha_pct) * v3).div_ceil(300).min(255);
+                let tl2 = ((100 - alpha_pct) * v3).div_ceil(300);
+                t.hi[x] = t1.max(tl1) as u16;
+                t.lo[x] = t1.min(tl1) as u16;
+                t.whi[x] = t2.max(tl2) as u16;
+                t.wlo[x] = t2.min(tl2) as u16;
+            }
+            t
+        })
+        .collect();
+
+    // 4. NMS + classification
+    let zeros = vec![0u32; w];
+    let mut classes = Plane::<u8>::new(img.width, img.height);
+    classes.data.par_chunks_mut(w).enumerate().for_each(|(y, out)| {
+        let row = |yy: usize| &s[yy * w..(yy + 1) * w];
+        let su = if y == 0 { &zeros[..] } else { row(y - 1) };
+        let sd = if y + 1 == h { &zeros[..] } else { row(y + 1) };
+        let (sm, sc) = (row(y), &sec[y * w..(y + 1) * w]);
+        let t = &thresholds[grid.row_window[y] as usize];
+        classify_row(su, sm, sd, sc, &t.hi, &t.lo, &t.whi, &t.wlo, out);
+        for x in [0, w - 1] {
+            let get = |xx: isize, r: &[u32]| if xx < 0 || xx >= w as isize { 0 } else { r[xx as usize] };
+            let v = sm[x];
+            let xi = x as isize;
+            let (a, b) = match sc[x] {
+                0 => (get(xi - 1, sm), get(xi + 1, sm)),
+                1 => (su[x], sd[x]),
+                2 => (get(xi - 1, su), get(xi + 1, sd)),
+                _ => (get(xi + 1, su), get(xi - 1, sd)),
+            };
+            let m = (sqrt_floor(v) >> 1) as u16;
+            let c = class_from(m, t.hi[x], t.lo[x], t.whi[x], t.wlo[x]);
+            out[x] = if v > 0 && v > a && v >= b { c } else { NONE };
+        }
+    });
+
+    // 5. rules, STRONG seeds, hysteresis
+    let zeros = vec![0u8; w];
+    let mut ruled = Plane::<u8>::new(img.width, img.height);
+    let seeds: Vec<usize> = ruled
+        .data
+        .par_chunks_mut(w)
+        .enumerate()
+        .flat_map_iter(|(y, out)| {
+            let row = |yy: usize| &classes.data[yy * w..(yy + 1) * w];
+            let cu = if y == 0 { &zeros[..] } else { row(y - 1) };
+            let cd = if y + 1 == h { &zeros[..] } else { row(y + 1) };
+            rules_row(cu, row(y), cd, out);
+            for x in [0, w - 1] {
+                out[x] = rules::rule_at(&classes, x as u32, y as u32);
+            }
+            out.iter().enumerate().filter(|&(_, &c)| c == STRONG).map(move |(x, _)| y * w + x).collect::<Vec<_>>()
+        })
+        .collect();
+    let edges = hysteresis::flood(&ruled, seeds);
+    debug_assert!(edges.data.iter().all(|&v| v == 0 || v == EDGE));
+    FastEdges { denoised: d, edges }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cpu::edge_map_with;
+
+    #[test]
+    fn sqrt_floor_is_exact_over_the_gradient_range() {
+        for s in 0..=2 * 510 * 510u32 {
+            assert_eq!(sqrt_floor(s), s.isqrt(), "{s}");
+        }
+    }
+
+    #[test]
+    fn sector_code_matches_nms_sector() {
+        let codes = [((-1, 0), (1, 0)), ((0, -1), (0, 1)), ((-1, -1), (1, 1)), ((1, -1), (-1, 1))];
+        for dx in -510..=510 {
+            for dy in (-510..=510).step_by(7) {
+                assert_eq!(codes[sector_code(dx, dy) as usize], super::super::nms::sector(dx, dy), "{dx} {dy}");
+            }
+        }
+    }
+
+    fn noise_image(w: u32, h: u32, seed: u64, levels: u64) -> Plane<u8> {
+        let mut s = seed;
+        let data = (0..w * h)
+            .map(|i| {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                // blocky structure plus noise, so every class occurs
+                let block = ((i % w) / 5 + (i / w) / 4) as u64 * 37 % 255;
+                ((block + (s >> 59) * levels) % 256) as u8
+            })
+            .collect();
+        Plane::from_vec(w, h, data).unwrap()
+    }
+
+    #[test]
+    fn equals_the_staged_pipeline_on_real_images() {
+        for name in ["camera_cc0_v0.18plus.png", "coins.png", "text.png", "chessboard_GRAY.png"] {
+            let path = format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"));
+            let img = crate::image::load_gray(&path).unwrap();
+            let em = edge_map_with(&img, 1000, 10_000, 35);
+            let f = edges_fused(&img, 1000, 10_000, 35);
+            assert!(em.edges.data.iter().filter(|&&v| v == EDGE).count() > 1000, "{name}");
+            assert_eq!(f.denoised, em.denoised, "{name}");
+            assert_eq!(f.edges, em.edges, "{name}");
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+        #[test]
+        fn equals_the_staged_pipeline(w in 1u32..70, h in 1u32..50, seed in proptest::prelude::any::<u64>(),
+                                      levels in 0u64..40, alpha in 0u32..100, num in 1u32..3000) {
+            let img = noise_image(w, h, seed, levels);
+            let em = edge_map_with(&img, num, 10_000, alpha);
+            let f = edges_fused(&img, num, 10_000, alpha);
+            proptest::prop_assert_eq!(&f.denoised, &em.denoised);
+            proptest::prop_assert_eq!(&f.edges, &em.edges);
+        }
+    }
+}
