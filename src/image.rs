@@ -64,7 +64,7 @@ impl<T: Copy> Plane<T> {
         &self.data[y as usize * w..(y as usize + 1) * w]
     }
 
-    /// A borrowed view (8-bit planes only are views; see [`GrayView`]).
+    /// Number of pixels.
     pub fn len(&self) -> usize {
         self.data.len()
     }
@@ -99,14 +99,18 @@ impl<'a> GrayView<'a> {
         if stride < width as usize {
             return Err(Error::InvalidImage { width, height, reason: format!("row stride {stride} is less than the width") });
         }
-        let need = stride * (height as usize - 1) + width as usize;
-        if data.len() < need {
+        let need = stride.checked_mul(height as usize - 1).and_then(|n| n.checked_add(width as usize));
+        let Some(need) = need.filter(|&n| n <= data.len()) else {
             return Err(Error::InvalidImage {
                 width,
                 height,
-                reason: format!("buffer has {} bytes, {need} needed for stride {stride}", data.len()),
+                reason: format!(
+                    "buffer has {} bytes, {} needed for stride {stride}",
+                    data.len(),
+                    need.map_or("more than usize::MAX".into(), |n| n.to_string())
+                ),
             });
-        }
+        };
         Ok(Self { width, height, stride, data })
     }
 

@@ -1,7 +1,5 @@
 //! SPEC 9: non-maximum suppression among corner candidates. Mirrors shaders/corner_nms.wgsl.
 
-use crate::image::Plane;
-
 /// True iff candidate `q` beats candidate `p`: a greater response, or an equal
 /// one and an earlier (y, x) position, so exactly one of a tied group survives.
 #[inline]
@@ -10,35 +8,31 @@ pub fn beats(rq: f32, q: [u32; 2], rp: f32, p: [u32; 2]) -> bool {
 }
 
 /// Indices of the candidates that no other candidate within the (2r+1)^2
-/// square beats. `cands` in any order; the result is in input order.
+/// square beats. `cands` in any order; the result is in input order. The
+/// level size is the shader's dispatch size; this sparse version needs only the candidates.
 ///
 /// ```
 /// let keep = lfast::cpu::corner_nms::corner_nms(10, 10, &[[2, 2], [3, 3], [9, 9]], &[1.0, 2.0, 0.5], 1);
 /// assert_eq!(keep, vec![1, 2]);
 /// ```
-pub fn corner_nms(width: u32, height: u32, cands: &[[u32; 2]], resp: &[f32], r: u32) -> Vec<usize> {
-    // candidate index per pixel, u32::MAX where none
-    let mut idx = Plane { width, height, data: vec![u32::MAX; width as usize * height as usize] };
-    for (i, &[x, y]) in cands.iter().enumerate() {
-        idx.data[y as usize * width as usize + x as usize] = i as u32;
-    }
-    let r = r as i32;
-    (0..cands.len())
+pub fn corner_nms(_width: u32, _height: u32, cands: &[[u32; 2]], resp: &[f32], r: u32) -> Vec<usize> {
+    // Visit candidates in raster order; those within r rows of p form one
+    // contiguous run of that order, found by binary search.
+    let mut by_pos: Vec<usize> = (0..cands.len()).collect();
+    by_pos.sort_unstable_by_key(|&i| (cands[i][1], cands[i][0]));
+    let ys: Vec<u32> = by_pos.iter().map(|&i| cands[i][1]).collect();
+    let mut keep: Vec<usize> = (0..cands.len())
         .filter(|&i| {
             let [px, py] = cands[i];
-            let (x0, x1) = ((px as i32 - r).max(0), (px as i32 + r).min(width as i32 - 1));
-            let (y0, y1) = ((py as i32 - r).max(0), (py as i32 + r).min(height as i32 - 1));
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    let j = idx.at(x as u32, y as u32);
-                    if j != u32::MAX && j as usize != i && beats(resp[j as usize], cands[j as usize], resp[i], cands[i]) {
-                        return false;
-                    }
-                }
-            }
-            true
+            let lo = ys.partition_point(|&y| y + r < py);
+            let hi = ys.partition_point(|&y| y <= py + r);
+            !by_pos[lo..hi].iter().any(|&j| {
+                j != i && cands[j][0].abs_diff(px) <= r && beats(resp[j], cands[j], resp[i], cands[i])
+            })
         })
-        .collect()
+        .collect();
+    keep.sort_unstable();
+    keep
 }
 
 #[cfg(test)]

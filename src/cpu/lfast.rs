@@ -74,17 +74,28 @@ pub fn circle_mask(e: &Plane<u8>, px: i32, py: i32) -> u32 {
 /// bits, cyclically, in order of start index. Empty for 0 and for all-16.
 pub fn branches(mask: u32) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
-    if mask == 0 || mask == 0xffff {
-        return out;
-    }
-    let bit = |i: usize| mask >> (i % 16) & 1 == 1;
-    for s in 0..16 {
-        if bit(s) && !bit(s + 15) {
-            let len = (0..16).take_while(|&k| bit(s + k)).count();
-            out.push((s, len));
-        }
-    }
+    for_each_branch(mask, |s, len| out.push((s, len)));
     out
+}
+
+/// Calls `f(start, len)` for each branch of `mask` in order of start index,
+/// without allocating (the hot path of [`is_corner`]).
+#[inline]
+pub fn for_each_branch(mask: u32, mut f: impl FnMut(usize, usize)) {
+    if mask == 0 || mask == 0xffff {
+        return;
+    }
+    // bit s of `starts` is set where a run begins: s set, s-1 (cyclically) clear
+    let prev = ((mask << 1) | (mask >> 15)) & 0xffff;
+    let mut starts = mask & !prev;
+    let doubled = mask | (mask << 16);
+    while starts != 0 {
+        let s = starts.trailing_zeros() as usize;
+        // run length: trailing ones of the mask rotated to start at s
+        let len = (!(doubled >> s)).trailing_zeros() as usize;
+        f(s, len.min(16));
+        starts &= starts - 1;
+    }
 }
 
 /// The L-FAST decision for edge pixel p (SPEC 8). p must lie >= 7 pixels from every side.
@@ -104,8 +115,11 @@ pub fn is_corner(e: &Plane<u8>, px: i32, py: i32, p: &LfastParams) -> bool {
                 }
             }
             let mut supported = 0;
-            for t in 0..16 {
-                if mask >> t & 1 == 1 && supports(e, px, py, t, p.support) {
+            let mut m = mask;
+            while m != 0 {
+                let t = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if supports(e, px, py, t, p.support) {
                     supported += 1;
                     if supported >= 2 {
                         return true;
@@ -115,15 +129,16 @@ pub fn is_corner(e: &Plane<u8>, px: i32, py: i32, p: &LfastParams) -> bool {
             false
         }
         Mode::Branch => {
+            // at most 8 branches fit on 16 positions
             let mut ts = [0usize; 8];
             let mut n = 0;
-            for (s, len) in branches(mask) {
+            for_each_branch(mask, |s, len| {
                 let t = (s + (len - 1) / 2) % 16;
                 if supports(e, px, py, t, p.support) {
                     ts[n] = t;
                     n += 1;
                 }
-            }
+            });
             match n {
                 0 | 1 => false,
                 2 => {
@@ -149,13 +164,18 @@ pub fn lfast(e: &Plane<u8>, mask: Option<&Plane<u8>>, p: &LfastParams) -> Vec<[u
             let row = e.row(y);
             let mrow = mask.map(|m| m.row(y));
             let mut out = Vec::new();
-            for x in b..e.width - b {
-                if row[x as usize] == EDGE
-                    && mrow.is_none_or(|m| m[x as usize] != 0)
-                    && is_corner(e, x as i32, y as i32, p)
-                {
-                    out.push([x, y]);
+            let (x0, x1) = (b as usize, (e.width - b) as usize);
+            let mut x = x0;
+            while x < x1 {
+                // edges are sparse: skip eight background pixels at a time
+                if x + 8 <= x1 && u64::from_ne_bytes(row[x..x + 8].try_into().expect("8 bytes")) == 0 {
+                    x += 8;
+                    continue;
                 }
+                if row[x] == EDGE && mrow.is_none_or(|m| m[x] != 0) && is_corner(e, x as i32, y as i32, p) {
+                    out.push([x as u32, y]);
+                }
+                x += 1;
             }
             out
         })
@@ -261,6 +281,19 @@ mod tests {
         // wrap-around branch 15, 0, 1: starts at 15
         assert_eq!(branches(0b1000_0000_0000_0011), vec![(15, 3)]);
         assert_eq!(branches(0b0000_0001_0000_0001), vec![(0, 1), (8, 1)]);
+        assert_eq!(branches(0xffff), vec![]);
+        assert_eq!(branches(0x7fff), vec![(0, 15)]);
+        assert_eq!(branches(0xfffe), vec![(1, 15)]);
+        assert_eq!(branches(0b1010_1010_1010_1010), (0..8).map(|i| (2 * i + 1, 1)).collect::<Vec<_>>());
+        // against a plain walk round the circle, for every mask
+        for m in 1..0xffffu32 {
+            let bit = |i: usize| m >> (i % 16) & 1 == 1;
+            let want: Vec<(usize, usize)> = (0..16)
+                .filter(|&s| bit(s) && !bit(s + 15))
+                .map(|s| (s, (0..16).take_while(|&k| bit(s + k)).count()))
+                .collect();
+            assert_eq!(branches(m), want, "{m:016b}");
+        }
         // Two branches 7 steps apart (157.5°) are a line at straight_tol 1, 6 are not.
         let arm = |t: usize| (1..12).map(move |k| (C + CIRCLE[t].0 * k / 3, C + CIRCLE[t].1 * k / 3));
         let e7 = map(arm(0).chain(arm(7)).chain([(C, C)]));

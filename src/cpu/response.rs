@@ -15,6 +15,10 @@ pub const HARRIS_K: f32 = 0.04;
 pub fn structure_sums(img: &Plane<u8>, x: u32, y: u32) -> (i32, i32, i32) {
     let r = BLOCK / 2;
     let (x, y) = (x as i32, y as i32);
+    let (w, h) = (img.width as i32, img.height as i32);
+    if x > r && y > r && x + r + 1 < w && y + r + 1 < h {
+        return structure_sums_inside(&img.data, w as usize, x as usize, y as usize);
+    }
     let p = |dx: i32, dy: i32| img.clamped(dx, dy) as i32;
     let (mut a, mut b, mut c) = (0i32, 0i32, 0i32);
     for by in y - r..=y + r {
@@ -23,6 +27,27 @@ pub fn structure_sums(img: &Plane<u8>, x: u32, y: u32) -> (i32, i32, i32) {
                 + (p(bx + 1, by + 1) - p(bx - 1, by + 1));
             let iy = (p(bx, by + 1) - p(bx, by - 1)) * 2 + (p(bx - 1, by + 1) - p(bx - 1, by - 1))
                 + (p(bx + 1, by + 1) - p(bx + 1, by - 1));
+            a += ix * ix;
+            b += iy * iy;
+            c += ix * iy;
+        }
+    }
+    (a, b, c)
+}
+
+/// [`structure_sums`] when the 9x9 footprint lies inside the image: rows by slice.
+#[inline]
+fn structure_sums_inside(d: &[u8], w: usize, x: usize, y: usize) -> (i32, i32, i32) {
+    let r = (BLOCK / 2) as usize;
+    let (mut a, mut b, mut c) = (0i32, 0i32, 0i32);
+    for by in y - r..=y + r {
+        let up = &d[(by - 1) * w + x - r - 1..(by - 1) * w + x + r + 2];
+        let mid = &d[by * w + x - r - 1..by * w + x + r + 2];
+        let down = &d[(by + 1) * w + x - r - 1..(by + 1) * w + x + r + 2];
+        for i in 1..=2 * r + 1 {
+            let p = |row: &[u8], k: usize| row[k] as i32;
+            let ix = (p(mid, i + 1) - p(mid, i - 1)) * 2 + (p(up, i + 1) - p(up, i - 1)) + (p(down, i + 1) - p(down, i - 1));
+            let iy = (p(down, i) - p(up, i)) * 2 + (p(down, i - 1) - p(up, i - 1)) + (p(down, i + 1) - p(up, i + 1));
             a += ix * ix;
             b += iy * iy;
             c += ix * iy;
@@ -71,6 +96,27 @@ mod tests {
         assert!(corner > 0.0);
         assert!(edge < 0.0, "an edge has a negative Harris score, got {edge}");
         assert_eq!(flat, 0.0);
+    }
+
+    #[test]
+    fn inside_path_matches_clamped_reads() {
+        let img = Plane::from_vec(30, 25, (0..750u32).map(|i| (i.wrapping_mul(2654435761) >> 24) as u8).collect()).unwrap();
+        for y in 0..25 {
+            for x in 0..30 {
+                let p = |dx: i32, dy: i32| img.clamped(dx, dy) as i32;
+                let (mut a, mut b, mut c) = (0, 0, 0);
+                for by in y - 3..=y + 3 {
+                    for bx in x - 3..=x + 3 {
+                        let ix = (p(bx + 1, by) - p(bx - 1, by)) * 2 + (p(bx + 1, by - 1) - p(bx - 1, by - 1)) + (p(bx + 1, by + 1) - p(bx - 1, by + 1));
+                        let iy = (p(bx, by + 1) - p(bx, by - 1)) * 2 + (p(bx - 1, by + 1) - p(bx - 1, by - 1)) + (p(bx + 1, by + 1) - p(bx + 1, by - 1));
+                        a += ix * ix;
+                        b += iy * iy;
+                        c += ix * iy;
+                    }
+                }
+                assert_eq!(structure_sums(&img, x as u32, y as u32), (a, b, c), "({x}, {y})");
+            }
+        }
     }
 
     #[test]
