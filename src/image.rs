@@ -100,7 +100,7 @@ impl<'a> GrayView<'a> {
             return Err(Error::InvalidImage { width, height, reason: format!("row stride {stride} is less than the width") });
         }
         let need = stride.checked_mul(height as usize - 1).and_then(|n| n.checked_add(width as usize));
-        let Some(need) = need.filter(|&n| n <= data.len()) else {
+        let Some(_) = need.filter(|&n| n <= data.len()) else {
             return Err(Error::InvalidImage {
                 width,
                 height,

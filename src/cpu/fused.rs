@@ -11,7 +11,7 @@
 //! 5. rules rows -> ruled classes, STRONG seeds; flood fill -> E
 
 use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
-use super::local_threshold::{Layout, add_row};
+use super::local_threshold::{BandHistograms, Layout};
 use super::simd::dispatch;
 use super::{hysteresis, median, rules};
 use crate::image::Plane;
@@ -31,9 +31,10 @@ pub struct FastEdges {
 /// over the whole range), and it vectorises.
 #[inline(always)]
 pub fn sqrt_floor(s: u32) -> u32 {
-    // `as i32` then `as u32`: the value is finite and below 2^20, and the
-    // signed conversion is a single vector instruction.
-    (s as i32 as f32).sqrt() as i32 as u32
+    let r = (s.min(2 * 510 * 510) as i32 as f32).sqrt();
+    // SAFETY: r is finite and in [0, 722] (the min keeps any input in range), so the truncating conversion is
+    // defined; unlike `as`, it needs no saturation checks and vectorises.
+    unsafe { r.to_int_unchecked::<i32>() as u32 }
 }
 
 /// SPEC 3's sector as a code: 0 horizontal, 1 vertical, 2 diagonal with equal
@@ -167,6 +168,28 @@ dispatch! {
     }
 }
 
+/// Calls `f(x)` for each nonzero byte of `v`, skipping zero runs 8 bytes at a
+/// time (flags and classes are mostly zero).
+#[inline]
+fn for_each_nonzero(v: &[u8], mut f: impl FnMut(usize)) {
+    let mut x = 0;
+    while x + 8 <= v.len() {
+        let word = u64::from_le_bytes(v[x..x + 8].try_into().expect("8 bytes"));
+        let mut bits = word;
+        while bits != 0 {
+            let k = bits.trailing_zeros() as usize / 8;
+            f(x + k);
+            bits &= !(0xffu64 << (8 * k));
+        }
+        x += 8;
+    }
+    for (k, &b) in v[x..].iter().enumerate() {
+        if b != 0 {
+            f(x + k);
+        }
+    }
+}
+
 /// Splits a plane's rows at the given row cuts into mutable bands.
 fn bands<'a, T>(data: &'a mut [T], w: usize, cuts: &[u32]) -> Vec<&'a mut [T]> {
     let mut rest = data;
@@ -201,11 +224,7 @@ pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u
                 out[x] = mid[x];
                 flags[x] = median::is_noise(img, x as u32, y as u32, delta_num, delta_den) as u8;
             }
-            for (x, f) in flags.iter().enumerate() {
-                if *f != 0 {
-                    out[x] = median::median3x3(img, x as u32, y as u32);
-                }
-            }
+            for_each_nonzero(flags, |x| out[x] = median::median3x3(img, x as u32, y as u32));
         },
     );
 
@@ -219,14 +238,14 @@ pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u
         .zip(bands(&mut sec, w, cy))
         .enumerate()
         .map(|(j, (s_band, sec_band))| {
-            let mut band = vec![[0u32; 256]; cx.len() - 1];
+            let mut band = BandHistograms::new(cx.len() - 1);
             let mut m8 = vec![0u8; w];
             for (k, (s_row, sec_row)) in s_band.chunks_mut(w).zip(sec_band.chunks_mut(w)).enumerate() {
                 let y = cy[j] + k as u32;
                 gradient_row(d.row(y), d.row((y + 1).min(h as u32 - 1)), s_row, sec_row, &mut m8);
-                add_row(&mut band, cx, |x| m8[x]);
+                band.add_row(cx, &m8);
             }
-            band
+            band.finish()
         })
         .collect();
 
@@ -302,7 +321,13 @@ pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u
             for x in [0, w - 1] {
                 out[x] = rules::rule_at(&classes, x as u32, y as u32);
             }
-            out.iter().enumerate().filter(|&(_, &c)| c == STRONG).map(move |(x, _)| y * w + x).collect::<Vec<_>>()
+            let mut seeds = Vec::new();
+            for_each_nonzero(out, |x| {
+                if out[x] == STRONG {
+                    seeds.push(y * w + x);
+                }
+            });
+            seeds
         })
         .collect();
     let edges = hysteresis::flood(&ruled, seeds);

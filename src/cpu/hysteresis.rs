@@ -21,22 +21,25 @@ pub fn hysteresis(classes: &Plane<u8>) -> Plane<u8> {
 }
 
 /// Hysteresis from the given STRONG pixels (linear indices, all of them).
-pub fn flood(classes: &Plane<u8>, mut stack: Vec<usize>) -> Plane<u8> {
+pub fn flood(classes: &Plane<u8>, seeds: Vec<usize>) -> Plane<u8> {
     let (w, h) = (classes.width as usize, classes.height as usize);
     let mut out = Plane::<u8>::new(classes.width, classes.height);
-    for &i in &stack {
+    // (x, y) on the stack: no division per visited pixel
+    let mut stack: Vec<(u32, u32)> = Vec::with_capacity(seeds.len());
+    for &i in &seeds {
         out.data[i] = EDGE;
+        stack.push(((i % w) as u32, (i / w) as u32));
     }
-    while let Some(i) = stack.pop() {
-        let (x, y) = (i % w, i / w);
+    while let Some((x, y)) = stack.pop() {
+        let (x, y) = (x as usize, y as usize);
         let (x0, x1) = (x.saturating_sub(1), (x + 1).min(w - 1));
-        let (y0, y1) = (y.saturating_sub(1), (y + 1).min(h - 1));
-        for ny in y0..=y1 {
+        for ny in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+            let row = ny * w;
             for nx in x0..=x1 {
-                let j = ny * w + nx;
+                let j = row + nx;
                 if out.data[j] == 0 && classes.data[j] == WEAK {
                     out.data[j] = EDGE;
-                    stack.push(j);
+                    stack.push((nx as u32, ny as u32));
                 }
             }
         }

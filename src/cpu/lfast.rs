@@ -32,40 +32,30 @@ impl LfastParams {
     }
 }
 
-#[inline(always)]
-fn is_edge(e: &Plane<u8>, x: i32, y: i32) -> bool {
-    e.at(x as u32, y as u32) == EDGE
-}
-
 /// Step 4: does circle point `t` (offset index) support the corner at p?
 /// `q = 2t - p` supports it when it is an edge, or when at least `support` of
 /// its 8 neighbours are. Reads reach 7 pixels from p: p must be >= 7 from every side.
 #[inline]
 pub fn supports(e: &Plane<u8>, px: i32, py: i32, t: usize, support: u32) -> bool {
+    let w = e.width as isize;
     let (dx, dy) = CIRCLE[t];
-    let (qx, qy) = (px + 2 * dx, py + 2 * dy);
-    if is_edge(e, qx, qy) {
+    let q = (py + 2 * dy) as isize * w + (px + 2 * dx) as isize;
+    let at = |o: isize| (e.data[(q + o) as usize] == EDGE) as u32;
+    if at(0) == 1 {
         return true;
     }
-    let mut n = 0;
-    for ny in -1..=1 {
-        for nx in -1..=1 {
-            if (nx, ny) != (0, 0) && is_edge(e, qx + nx, qy + ny) {
-                n += 1;
-            }
-        }
-    }
+    let n = at(-w - 1) + at(-w) + at(-w + 1) + at(-1) + at(1) + at(w - 1) + at(w) + at(w + 1);
     n >= support
 }
 
 /// The 16-bit mask of edge pixels on the circle around p (bit i = CIRCLE[i]).
 #[inline]
 pub fn circle_mask(e: &Plane<u8>, px: i32, py: i32) -> u32 {
+    let w = e.width as isize;
+    let c = py as isize * w + px as isize;
     let mut m = 0;
     for (i, &(dx, dy)) in CIRCLE.iter().enumerate() {
-        if is_edge(e, px + dx, py + dy) {
-            m |= 1 << i;
-        }
+        m |= ((e.data[(c + dy as isize * w + dx as isize) as usize] == EDGE) as u32) << i;
     }
     m
 }
@@ -129,22 +119,33 @@ pub fn is_corner(e: &Plane<u8>, px: i32, py: i32, p: &LfastParams) -> bool {
             false
         }
         Mode::Branch => {
+            // Fewer than two branches, or exactly two on a straight line, can
+            // never make a corner, whatever Step 4 says: skip its reads.
+            let mut mids = [0usize; 8];
+            let mut nb = 0;
+            for_each_branch(mask, |s, len| {
+                mids[nb] = (s + (len - 1) / 2) % 16;
+                nb += 1;
+            });
+            let straight = |a: usize, b: usize| {
+                let d = a.abs_diff(b);
+                d.min(16 - d) >= 8 - p.straight_tol as usize
+            };
+            if nb < 2 || (nb == 2 && straight(mids[0], mids[1])) {
+                return false;
+            }
             // at most 8 branches fit on 16 positions
             let mut ts = [0usize; 8];
             let mut n = 0;
-            for_each_branch(mask, |s, len| {
-                let t = (s + (len - 1) / 2) % 16;
+            for &t in &mids[..nb] {
                 if supports(e, px, py, t, p.support) {
                     ts[n] = t;
                     n += 1;
                 }
-            });
+            }
             match n {
                 0 | 1 => false,
-                2 => {
-                    let d = ts[0].abs_diff(ts[1]);
-                    d.min(16 - d) < 8 - p.straight_tol as usize
-                }
+                2 => !straight(ts[0], ts[1]),
                 _ => true,
             }
         }

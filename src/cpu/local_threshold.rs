@@ -184,6 +184,41 @@ pub(crate) fn add_row(band: &mut [[u32; 256]], cx: &[u32], m8: impl Fn(usize) ->
     }
 }
 
+/// Cell histograms of one band kept as four interleaved sub-histograms, so
+/// that runs of equal values do not serialise on one counter; merged once.
+pub(crate) struct BandHistograms {
+    quads: Vec<[[u32; 256]; 4]>,
+}
+
+impl BandHistograms {
+    pub fn new(cells: usize) -> Self {
+        Self { quads: vec![[[0; 256]; 4]; cells] }
+    }
+
+    /// Adds one row of M8 values to the cells it crosses.
+    #[inline]
+    pub fn add_row(&mut self, cx: &[u32], m8: &[u8]) {
+        for (i, q) in self.quads.iter_mut().enumerate() {
+            let cell = &m8[cx[i] as usize..cx[i + 1] as usize];
+            let mut chunks = cell.chunks_exact(4);
+            for c in &mut chunks {
+                q[0][c[0] as usize] += 1;
+                q[1][c[1] as usize] += 1;
+                q[2][c[2] as usize] += 1;
+                q[3][c[3] as usize] += 1;
+            }
+            for &v in chunks.remainder() {
+                q[0][v as usize] += 1;
+            }
+        }
+    }
+
+    /// The merged histogram of each cell.
+    pub fn finish(self) -> Vec<[u32; 256]> {
+        self.quads.iter().map(|q| std::array::from_fn(|b| q[0][b] + q[1][b] + q[2][b] + q[3][b])).collect()
+    }
+}
+
 /// Window statistics of `M8 = min(M, 255)` (SPEC 5).
 pub fn local_threshold(m: &Plane<u16>) -> WindowGrid {
     let (w, h) = (m.width, m.height);

@@ -31,6 +31,14 @@ pub fn is_noise(src: &Plane<u8>, x: u32, y: u32, delta_num: u32, delta_den: u32)
 /// Median of the 3x3 window around (x, y), replicate border.
 #[inline]
 pub fn median3x3(src: &Plane<u8>, x: u32, y: u32) -> u8 {
+    let (w, h) = (src.width, src.height);
+    if x > 0 && y > 0 && x + 1 < w && y + 1 < h {
+        // inside: three row slices, no clamping
+        let w = w as usize;
+        let c = y as usize * w + x as usize;
+        let (u, m, d) = (&src.data[c - w - 1..c - w + 2], &src.data[c - 1..c + 2], &src.data[c + w - 1..c + w + 2]);
+        return median9([u[0], u[1], u[2], m[0], m[1], m[2], d[0], d[1], d[2]]);
+    }
     let (x, y) = (x as i32, y as i32);
     let mut v = [0u8; 9];
     let mut i = 0;

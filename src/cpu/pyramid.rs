@@ -3,6 +3,7 @@
 //! Mirrors shaders/pyramid.wgsl. Weights are computed from integers only, so
 //! the GPU derives the same ones without any float.
 
+use super::simd::dispatch;
 use crate::image::Plane;
 use rayon::prelude::*;
 
@@ -37,23 +38,72 @@ pub fn tap(d: u32, src_len: u32, dst_len: u32) -> (u32, i32) {
     (s as u32, w)
 }
 
-/// Resizes `src` to `dw x dh` (bilinear, Q11 weights, result rounded).
+/// Resizes `src` to `dw x dh` (bilinear, Q11 weights, result rounded):
+/// `out = (wy0 * (wx0*p00 + wx1*p01) + wy1 * (wx0*p10 + wx1*p11) + 2^21) >> 22`.
 pub fn resize(src: &Plane<u8>, dw: u32, dh: u32) -> Plane<u8> {
-    let xt: Vec<(u32, i32)> = (0..dw).map(|x| tap(x, src.width, dw)).collect();
+    let (sx, wx): (Vec<u32>, Vec<i32>) = (0..dw).map(|x| tap(x, src.width, dw)).unzip();
+    let sx1: Vec<u32> = sx.iter().map(|&s| (s + 1).min(src.width - 1)).collect();
+    let w = dw as usize;
+    // horizontal taps of source row `sy` at every destination column
+    let hrow = |sy: u32, out: &mut [i32]| {
+        let r = src.row(sy);
+        for (((o, &s0), &s1), &k) in out.iter_mut().zip(&sx).zip(&sx1).zip(&wx) {
+            *o = (ONE - k) * r[s0 as usize] as i32 + k * r[s1 as usize] as i32;
+        }
+    };
+    const BAND: usize = 16;
     let mut out = Plane::<u8>::new(dw, dh);
-    out.data.par_chunks_mut(dw as usize).enumerate().for_each(|(y, row)| {
-        let (sy, wy) = tap(y as u32, src.height, dh);
-        let r0 = src.row(sy);
-        let r1 = src.row((sy + 1).min(src.height - 1));
-        for (o, &(sx, wx)) in row.iter_mut().zip(&xt) {
-            let sx1 = (sx + 1).min(src.width - 1) as usize;
-            let sx = sx as usize;
-            let h0 = (ONE - wx) * r0[sx] as i32 + wx * r0[sx1] as i32;
-            let h1 = (ONE - wx) * r1[sx] as i32 + wx * r1[sx1] as i32;
-            let v = (ONE - wy) * h0 + wy * h1;
-            *o = ((v + (1 << (2 * COEF_BITS - 1))) >> (2 * COEF_BITS)) as u8;
+    out.data.par_chunks_mut(w * BAND).enumerate().for_each(|(band, rows)| {
+        // the two source rows last interpolated, reused by the next destination row
+        let (mut h0, mut h1) = (vec![0i32; w], vec![0i32; w]);
+        let mut have: (u32, u32) = (u32::MAX, u32::MAX);
+        for (k, row) in rows.chunks_mut(w).enumerate() {
+            let (sy, wy) = tap((band * BAND + k) as u32, src.height, dh);
+            let sy1 = (sy + 1).min(src.height - 1);
+            if have.0 != sy {
+                if have.1 == sy {
+                    std::mem::swap(&mut h0, &mut h1);
+                    have.1 = u32::MAX;
+                } else {
+                    hrow(sy, &mut h0);
+                }
+                have.0 = sy;
+            }
+            if have.1 != sy1 {
+                hrow(sy1, &mut h1);
+                have.1 = sy1;
+            }
+            vblend(&h0, &h1, wy, row);
         }
     });
+    out
+}
+
+dispatch! {
+    /// Vertical blend of two horizontally interpolated rows, rounded to bytes.
+    fn vblend(h0: &[i32], h1: &[i32], wy: i32, out: &mut [u8]) {
+        let (h0, h1) = (&h0[..out.len()], &h1[..out.len()]);
+        for x in 0..out.len() {
+            let v = (ONE - wy) * h0[x] + wy * h1[x];
+            out[x] = ((v + (1 << (2 * COEF_BITS - 1))) >> (2 * COEF_BITS)) as u8;
+        }
+    }
+}
+
+/// The plain per-pixel form of [`resize`], the reference it is tested against.
+pub fn resize_naive(src: &Plane<u8>, dw: u32, dh: u32) -> Plane<u8> {
+    let mut out = Plane::<u8>::new(dw, dh);
+    for y in 0..dh {
+        let (sy, wy) = tap(y, src.height, dh);
+        for x in 0..dw {
+            let (sx, wx) = tap(x, src.width, dw);
+            let p = |xx: u32, yy: u32| src.at(xx.min(src.width - 1), yy.min(src.height - 1)) as i32;
+            let h0 = (ONE - wx) * p(sx, sy) + wx * p(sx + 1, sy);
+            let h1 = (ONE - wx) * p(sx, sy + 1) + wx * p(sx + 1, sy + 1);
+            let v = (ONE - wy) * h0 + wy * h1;
+            out.data[(y * dw + x) as usize] = ((v + (1 << (2 * COEF_BITS - 1))) >> (2 * COEF_BITS)) as u8;
+        }
+    }
     out
 }
 
@@ -106,6 +156,16 @@ mod tests {
         assert_eq!(tap(1033, 1241, 1034), (1239, 1843));
         // upscaling past the last source pixel clamps with weight 0
         assert_eq!(tap(3, 2, 4), (1, 0));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn matches_naive(sw in 1u32..60, sh in 1u32..60, dw in 1u32..60, dh in 1u32..60, seed in proptest::prelude::any::<u64>()) {
+            let mut s = seed;
+            let data: Vec<u8> = (0..sw * sh).map(|_| { s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407); (s >> 56) as u8 }).collect();
+            let src = Plane::from_vec(sw, sh, data).unwrap();
+            proptest::prop_assert_eq!(resize(&src, dw, dh), resize_naive(&src, dw, dh));
+        }
     }
 
     #[test]
