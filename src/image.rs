@@ -114,6 +114,12 @@ impl<'a> GrayView<'a> {
         Ok(Self { width, height, stride, data })
     }
 
+    /// Re-checks size and buffer length: a view made from a [`Plane`] (whose
+    /// fields are public) has not been through [`GrayView::new`].
+    pub fn check(&self) -> Result<()> {
+        GrayView::new(self.width, self.height, self.stride, self.data).map(|_| ())
+    }
+
     /// Columns.
     pub fn width(&self) -> u32 {
         self.width

@@ -49,6 +49,9 @@ pub fn sobel_at(img: &Plane<u8>, x: i32, y: i32) -> (i32, i32) {
 /// assert!((2..18).all(|y| (0..20).filter(|&x| e.at(x, y) == 255).count() == 1));
 /// ```
 pub fn canny(img: &Plane<u8>, p: &CannyParams) -> Plane<u8> {
+    if img.is_empty() {
+        return img.clone();
+    }
     let blurred = gaussian_blur(img, &gaussian_kernel_q8(p.ksize, p.sigma));
     let (w, h) = (img.width as usize, img.height as usize);
     let mut gxy = vec![(0i32, 0i32); w * h];

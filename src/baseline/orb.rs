@@ -79,6 +79,7 @@ impl OrbDetector {
 
     /// Keypoints and descriptors, in SPEC 9 order (response, level, y, x).
     pub fn detect_and_compute(&self, image: GrayView<'_>) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
+        image.check()?;
         let p = &self.params;
         let sizes = self.inner.config().level_sizes(image.width(), image.height());
         let levels = pyramid::pyramid(&image.to_plane(), &sizes);

@@ -43,6 +43,9 @@ pub fn reflect101(i: i32, len: i32) -> usize {
 /// `out = (sum_y w_y * sum_x w_x * p + 2^15) >> 16`, BORDER_REFLECT_101.
 /// The horizontal sums fit u16 because the weights sum to 256.
 pub fn gaussian_blur(src: &Plane<u8>, kernel: &[u32]) -> Plane<u8> {
+    if src.is_empty() {
+        return src.clone();
+    }
     match kernel.len() {
         7 => blur_n::<7>(src, kernel.try_into().expect("length checked")),
         5 => blur_n::<5>(src, kernel.try_into().expect("length checked")),

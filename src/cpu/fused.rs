@@ -205,7 +205,7 @@ fn bands<'a, T>(data: &'a mut [T], w: usize, cuts: &[u32]) -> Vec<&'a mut [T]> {
 /// D and E of `img` (SPEC 1-7), equal to [`edge_map`](super::edge_map)'s.
 pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u32) -> FastEdges {
     let (w, h) = (img.width as usize, img.height as usize);
-    if w < 3 {
+    if w < 3 || img.is_empty() {
         // The row kernels need an interior; tiny images take the staged path.
         let em = super::edge_map_with(img, delta_num, delta_den, alpha_pct);
         return FastEdges { denoised: em.denoised, edges: em.edges };

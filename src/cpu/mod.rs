@@ -59,6 +59,24 @@ pub struct EdgeMap {
 }
 
 impl EdgeMap {
+    /// The edge map of an image without pixels.
+    fn empty(w: u32, h: u32) -> Self {
+        let grid = WindowGrid { a: 0, b: 0, xs: vec![], ys: vec![], stats: vec![], col_window: vec![], row_window: vec![] };
+        let g = Gradient { gx2: Plane::new(w, h), gy2: Plane::new(w, h), s: Plane::new(w, h), m: Plane::new(w, h) };
+        let e = Plane::new(w, h);
+        EdgeMap {
+            denoised: e.clone(),
+            gradient: g,
+            nms: e.clone(),
+            histogram: [0; 256],
+            otsu_k: None,
+            windows: grid,
+            classes: e.clone(),
+            ruled: e.clone(),
+            edges: e,
+        }
+    }
+
     /// T1 = k + 1, or `None` when the image has no edges.
     pub fn t1(&self) -> Option<u32> {
         self.otsu_k.map(|k| k as u32 + 1)
@@ -99,6 +117,9 @@ pub fn edge_map(img: &Plane<u8>, cfg: &Config) -> EdgeMap {
 
 /// [`edge_map`] with the two parameters it reads given directly.
 pub fn edge_map_with(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u32) -> EdgeMap {
+    if img.is_empty() {
+        return EdgeMap::empty(img.width, img.height);
+    }
     let denoised = median::median(img, delta_num, delta_den);
     let gradient = gradient::gradient(&denoised);
     let nms = nms::nms(&gradient);
@@ -156,6 +177,7 @@ impl CpuDetector {
 
     /// The improved Canny edge map of `image` with its intermediates.
     pub fn edges(&self, image: GrayView<'_>) -> Result<EdgeMap> {
+        image.check()?;
         Ok(edge_map(&image.to_plane(), &self.cfg))
     }
 
@@ -202,6 +224,7 @@ impl CpuDetector {
     /// OpenCV's integer one. Orientation is recomputed from the image (the
     /// `angle` field is not read), so the result equals `detect_and_compute`'s.
     pub fn compute(&self, image: GrayView<'_>, keypoints: &[KeyPoint]) -> Result<Vec<Descriptor>> {
+        image.check()?;
         let sizes = self.cfg.level_sizes(image.width(), image.height());
         let mut at = Vec::with_capacity(keypoints.len());
         for (index, kp) in keypoints.iter().enumerate() {
@@ -235,6 +258,10 @@ impl CpuDetector {
 
     /// SPEC 1-9 on every level: the pyramid and the selected corners in SPEC 9 order.
     fn find(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<Found> {
+        image.check()?;
+        if let Some(m) = mask {
+            m.check()?;
+        }
         if let Some(m) = mask
             && (m.width(), m.height()) != (image.width(), image.height())
         {

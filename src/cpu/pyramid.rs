@@ -41,6 +41,9 @@ pub fn tap(d: u32, src_len: u32, dst_len: u32) -> (u32, i32) {
 /// Resizes `src` to `dw x dh` (bilinear, Q11 weights, result rounded):
 /// `out = (wy0 * (wx0*p00 + wx1*p01) + wy1 * (wx0*p10 + wx1*p11) + 2^21) >> 22`.
 pub fn resize(src: &Plane<u8>, dw: u32, dh: u32) -> Plane<u8> {
+    if src.is_empty() || dw == 0 || dh == 0 {
+        return Plane::new(dw, dh); // nothing to sample
+    }
     let (sx, wx): (Vec<u32>, Vec<i32>) = (0..dw).map(|x| tap(x, src.width, dw)).unzip();
     let sx1: Vec<u32> = sx.iter().map(|&s| (s + 1).min(src.width - 1)).collect();
     let w = dw as usize;
