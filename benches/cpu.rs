@@ -1,1 +1,60 @@
-fn main(){}
+//! Criterion benchmarks of the CPU path: the improved Canny edge map, L-FAST
+//! detection, detection + ORB description, and the SPEC 12 baselines.
+//!
+//! Run: `cargo bench --bench cpu` (a few minutes on 2 cores); one group:
+//! `cargo bench --bench cpu -- kitti`. Under `cargo test --benches` (as
+//! `.ci/run` does) each benchmark runs once, as a smoke test.
+//!
+//! Images: the bundled CC0 `tests/data/camera_cc0_v0.18plus.png` (512x512) and
+//! KITTI seq01 frame 20 (1241x376) from `../shared/data`; the KITTI group is
+//! skipped with a message when `../shared` is absent (a plain clone).
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use lfast::baseline::canny::{CannyParams, canny};
+use lfast::baseline::fast::fast9;
+use lfast::baseline::orb::{OrbDetector, OrbParams};
+use lfast::cpu::CpuDetector;
+use lfast::{Config, Plane};
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Duration;
+
+const KITTI: &str = "../shared/data/kitti/seq01_000000-000050/image_0/000020.png";
+const CAMERA: &str = "tests/data/camera_cc0_v0.18plus.png";
+
+fn load(rel: &str) -> Option<Plane<u8>> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
+    if !path.exists() {
+        eprintln!("skipping benchmarks on {}: file not found (../shared/data is absent in a plain clone)", path.display());
+        return None;
+    }
+    Some(lfast::image::load_gray(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
+}
+
+fn bench_image(c: &mut Criterion, group: &str, img: &Plane<u8>) {
+    let det = CpuDetector::new(Config::default()).expect("default config is valid");
+    let orb = OrbDetector::new(OrbParams { n_features: 2000, ..OrbParams::default() }).expect("valid ORB params");
+    let canny_params = CannyParams::default();
+
+    let mut g = c.benchmark_group(format!("{group}_{}x{}", img.width, img.height));
+    g.sample_size(20).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(3));
+    g.bench_function("edges", |b| b.iter(|| det.edge_image(black_box(img.view())).unwrap()));
+    g.bench_function("edges_with_intermediates", |b| b.iter(|| det.edges(black_box(img.view())).unwrap()));
+    g.bench_function("detect", |b| b.iter(|| det.detect(black_box(img.view()), None).unwrap()));
+    g.bench_function("detect_and_compute", |b| b.iter(|| det.detect_and_compute(black_box(img.view()), None).unwrap()));
+    g.bench_function("baseline_canny", |b| b.iter(|| canny(black_box(img), &canny_params)));
+    g.bench_function("baseline_fast9", |b| b.iter(|| fast9(black_box(img), 20, true)));
+    g.bench_function("baseline_orb2000", |b| b.iter(|| orb.detect_and_compute(black_box(img.view())).unwrap()));
+    g.finish();
+}
+
+fn cpu(c: &mut Criterion) {
+    if let Some(img) = load(KITTI) {
+        bench_image(c, "kitti_seq01_000020", &img);
+    }
+    let img = load(CAMERA).expect("the bundled test image is part of the repository");
+    bench_image(c, "camera", &img);
+}
+
+criterion_group!(benches, cpu);
+criterion_main!(benches);

@@ -76,9 +76,9 @@ fn run(cli: Cli) -> lfast::Result<()> {
         Cmd::Edges { image, out, common } => {
             let det = CpuDetector::new(config(&common)?)?;
             let img = lfast::image::load_gray(&image)?;
-            let em = det.edges(img.view())?;
-            write_png(&em.edges, &out)?;
-            let n = em.edges.data.iter().filter(|&&v| v != 0).count();
+            let edges = det.edge_image(img.view())?;
+            write_png(&edges, &out)?;
+            let n = edges.data.iter().filter(|&&v| v != 0).count();
             println!("{}: {n} edge pixels -> {}", image.display(), out.display());
         }
     }

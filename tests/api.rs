@@ -584,3 +584,12 @@ fn extreme_valid_configs_do_not_panic() {
         assert_eq!(det.compute(img.view(), &kps).unwrap(), desc, "{cfg:?}");
     }
 }
+
+#[test]
+fn edge_image_equals_the_staged_edge_map() {
+    let det = lfast::cpu::CpuDetector::new(lfast::Config::default()).unwrap();
+    for name in ["camera_cc0_v0.18plus.png", "coins.png", "text.png", "astronaut_256.png"] {
+        let img = lfast::image::load_gray(common::data(name)).unwrap();
+        assert_eq!(det.edge_image(img.view()).unwrap(), det.edges(img.view()).unwrap().edges, "{name}");
+    }
+}

@@ -175,7 +175,15 @@ impl CpuDetector {
         self.mask_radius
     }
 
-    /// The improved Canny edge map of `image` with its intermediates.
+    /// The improved Canny edge map E of `image` (255 = edge), by the fused
+    /// fast path; identical to `edges(image)?.edges`.
+    pub fn edge_image(&self, image: GrayView<'_>) -> Result<Plane<u8>> {
+        image.check()?;
+        Ok(fused::edges_fused(&image.to_plane(), self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct).edges)
+    }
+
+    /// The improved Canny edge map of `image` with all its intermediates (the
+    /// staged path, for debugging and cross-checks; [`edge_image`](Self::edge_image) is faster).
     pub fn edges(&self, image: GrayView<'_>) -> Result<EdgeMap> {
         image.check()?;
         Ok(edge_map(&image.to_plane(), &self.cfg))

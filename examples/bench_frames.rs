@@ -1,0 +1,105 @@
+//! Times the CPU pipeline over a list of image files and prints JSON to stdout.
+//!
+//! ```text
+//! cargo run --release --example bench_frames -- [--repeats R] FILE...
+//! ```
+//!
+//! For each method the frames are loaded once (decoding is not timed), the
+//! whole list is run once to warm up, then `R` (default 5) more times; each
+//! pass gives a time per frame (pass time / number of frames). Reported: the
+//! median and the minimum of those `R` values, in ms per frame. Methods:
+//!
+//! - `edges`: `CpuDetector::edge_image` (SPEC 1-7 on level 0 only, fused path);
+//! - `lfast_detect_and_compute`: `CpuDetector::detect_and_compute`, default config;
+//! - `orb_baseline`: `baseline::orb::OrbDetector` with `n_features = 2000`.
+//!
+//! `scripts/bench_opencv.py` runs this and times OpenCV on the same frames.
+
+use lfast::baseline::orb::{OrbDetector, OrbParams};
+use lfast::cpu::CpuDetector;
+use lfast::{Config, Plane};
+use serde_json::json;
+use std::hint::black_box;
+use std::time::Instant;
+
+fn usage() -> ! {
+    eprintln!("usage: bench_frames [--repeats R] FILE...");
+    std::process::exit(2);
+}
+
+/// Runs `f` on every frame once (warm-up), then `repeats` times; returns ms per frame of each timed pass.
+fn time_passes(frames: &[Plane<u8>], repeats: usize, mut f: impl FnMut(&Plane<u8>) -> usize) -> (Vec<f64>, f64) {
+    let mut count = 0usize;
+    for img in frames {
+        count += black_box(f(img));
+    }
+    let mut per_frame = Vec::with_capacity(repeats);
+    for _ in 0..repeats {
+        let t = Instant::now();
+        for img in frames {
+            black_box(f(img));
+        }
+        per_frame.push(t.elapsed().as_secs_f64() * 1e3 / frames.len() as f64);
+    }
+    (per_frame, count as f64 / frames.len() as f64)
+}
+
+fn summary(per_frame: &[f64], mean_count: f64, count_name: &str) -> serde_json::Value {
+    let mut s = per_frame.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    let median = if n % 2 == 1 { s[n / 2] } else { (s[n / 2 - 1] + s[n / 2]) / 2.0 };
+    json!({
+        "median_ms": median,
+        "min_ms": s[0],
+        "passes_ms": per_frame,
+        count_name: mean_count,
+    })
+}
+
+fn main() -> lfast::Result<()> {
+    let mut args = std::env::args().skip(1);
+    let mut repeats = 5usize;
+    let mut files = Vec::new();
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--repeats" | "-r" => {
+                repeats = args.next().and_then(|v| v.parse().ok()).filter(|&r| r > 0).unwrap_or_else(|| usage());
+            }
+            "-h" | "--help" => usage(),
+            _ => files.push(a),
+        }
+    }
+    if files.is_empty() {
+        usage();
+    }
+    let frames: Vec<Plane<u8>> = files.iter().map(lfast::image::load_gray).collect::<lfast::Result<_>>()?;
+
+    let det = CpuDetector::new(Config::default())?;
+    let orb = OrbDetector::new(OrbParams { n_features: 2000, ..OrbParams::default() })?;
+
+    let (edges, n_edges) = time_passes(&frames, repeats, |img| {
+        let e = det.edge_image(img.view()).expect("valid image");
+        e.data.iter().filter(|&&v| v != 0).count()
+    });
+    let (lfast, n_lfast) =
+        time_passes(&frames, repeats, |img| det.detect_and_compute(img.view(), None).expect("valid image").0.len());
+    let (orb_t, n_orb) = time_passes(&frames, repeats, |img| orb.detect_and_compute(img.view()).expect("valid image").0.len());
+
+    let mut sizes: Vec<[u32; 2]> = frames.iter().map(|f| [f.width, f.height]).collect();
+    sizes.sort_unstable();
+    sizes.dedup();
+    let out = json!({
+        "frames": frames.len(),
+        "sizes": sizes,
+        "repeats": repeats,
+        "threads": rayon::current_num_threads(),
+        "methods": {
+            "edges": summary(&edges, n_edges, "mean_edge_pixels"),
+            "lfast_detect_and_compute": summary(&lfast, n_lfast, "mean_keypoints"),
+            "orb_baseline": summary(&orb_t, n_orb, "mean_keypoints"),
+        }
+    });
+    println!("{}", serde_json::to_string_pretty(&out).expect("JSON"));
+    Ok(())
+}

@@ -1,0 +1,180 @@
+#!/usr/bin/env python3
+"""Times lfast's CPU pipeline against OpenCV on the same frames, in one run.
+
+Ours: runs `cargo run --release --example bench_frames -- --repeats R FILES...`
+(or a prebuilt bench_frames binary given with --bin) and reads its JSON.
+Theirs: cv2.Canny(img, 100, 200) and cv2.ORB_create(2000).detectAndCompute(img, None)
+on the same frames, with the same scheme: frames decoded once (not timed), one
+warm-up pass over the whole list, then R timed passes; each pass gives ms per
+frame; reported are the median and the minimum over the R passes. OpenCV keeps
+its default thread count (cv2.setNumThreads is not called); lfast uses rayon's
+default (one thread per core).
+
+Ratios printed (ours / theirs, of the medians and of the minima; lower is better;
+the target applies to the median ratio):
+  improved-Canny edges          / cv2.Canny            target <= 1.0
+  L-FAST + ORB detect_and_compute / cv2 ORB(2000)      target <= 0.5
+  our ORB baseline (2000)       / cv2 ORB(2000)        (no target)
+
+Default frames: the 51 KITTI frames of ../shared/data/kitti/seq01_000000-000050/image_0.
+Requires: pip install opencv-python-headless numpy.
+
+Usage: python3 scripts/bench_opencv.py [--repeats R] [--bin PATH [--commit REV]] [--json-out FILE] [FILES...]
+"""
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import cv2
+
+ROOT = Path(__file__).resolve().parent.parent
+KITTI_DIR = ROOT.parent / "shared" / "data" / "kitti" / "seq01_000000-000050" / "image_0"
+
+# (our method, OpenCV method, label, target ratio or None)
+PAIRS = [
+    ("edges", "cv2_canny", "improved Canny edges / cv2.Canny(100, 200)", 1.0),
+    ("lfast_detect_and_compute", "cv2_orb2000", "L-FAST+ORB detect_and_compute / cv2 ORB(2000)", 0.5),
+    ("orb_baseline", "cv2_orb2000", "our ORB baseline (2000) / cv2 ORB(2000)", None),
+]
+
+
+def time_passes(frames, repeats, fn):
+    """One warm-up pass, then `repeats` timed passes; ms per frame of each pass."""
+    count = 0
+    for img in frames:
+        count += fn(img)
+    per_frame = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        for img in frames:
+            fn(img)
+        per_frame.append((time.perf_counter() - t) * 1e3 / len(frames))
+    return per_frame, count / len(frames)
+
+
+def summary(per_frame, mean_count, count_name):
+    return {
+        "median_ms": statistics.median(per_frame),
+        "min_ms": min(per_frame),
+        "passes_ms": per_frame,
+        count_name: mean_count,
+    }
+
+
+def run_ours(files, repeats, binary):
+    if binary:
+        cmd = [str(binary)]
+    else:
+        cmd = ["cargo", "run", "--quiet", "--release", "--example", "bench_frames", "--"]
+    cmd += ["--repeats", str(repeats)] + [str(f) for f in files]
+    print("running:", " ".join(cmd[:8]), f"... ({len(files)} files)", file=sys.stderr)
+    out = subprocess.run(cmd, cwd=ROOT, check=True, stdout=subprocess.PIPE, text=True).stdout
+    return json.loads(out)
+
+
+def run_opencv(files, repeats):
+    frames = []
+    for f in files:
+        img = cv2.imread(str(f), cv2.IMREAD_GRAYSCALE)
+        if img is None:
+            raise SystemExit(f"cannot read {f}")
+        frames.append(img)
+    orb = cv2.ORB_create(2000)
+    canny_t, canny_n = time_passes(frames, repeats, lambda img: int(cv2.countNonZero(cv2.Canny(img, 100, 200))))
+    orb_t, orb_n = time_passes(frames, repeats, lambda img: len(orb.detectAndCompute(img, None)[0]))
+    return {
+        "cv2_canny": summary(canny_t, canny_n, "mean_edge_pixels"),
+        "cv2_orb2000": summary(orb_t, orb_n, "mean_keypoints"),
+    }
+
+
+def git_commit():
+    try:
+        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, check=True,
+                             stdout=subprocess.PIPE, text=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT, check=True,
+                               stdout=subprocess.PIPE, text=True).stdout.strip()
+        return rev + ("+dirty" if dirty else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def cpu_model():
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("files", nargs="*", type=Path, help="image files (default: the 51 KITTI seq01 frames)")
+    ap.add_argument("--repeats", "-r", type=int, default=5, help="timed passes over the list (default 5)")
+    ap.add_argument("--bin", type=Path, help="prebuilt bench_frames binary (default: cargo run --release)")
+    ap.add_argument("--json-out", type=Path, help="also write all numbers to this JSON file")
+    ap.add_argument("--commit", help="what the measured binary was built from (default: this checkout's "
+                    "`git rev-parse --short HEAD`, +dirty if it has uncommitted changes)")
+    args = ap.parse_args()
+    if args.repeats < 1:
+        ap.error("--repeats must be >= 1")
+
+    files = args.files or sorted(KITTI_DIR.glob("*.png"))
+    if not files:
+        raise SystemExit(f"no frames given and none found in {KITTI_DIR} (../shared/data absent?)")
+
+    load_before = os.getloadavg()
+    ours = run_ours(files, args.repeats, args.bin)
+    theirs = run_opencv(files, args.repeats)
+    methods = dict(ours["methods"], **theirs)
+
+    print(f"\n{len(files)} frames {ours['sizes']}, {args.repeats} timed passes after 1 warm-up; "
+          f"lfast {ours['threads']} rayon threads, OpenCV {cv2.__version__} with {cv2.getNumThreads()} threads; "
+          f"load average {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after")
+    print(f"\n{'method':36} {'median ms/frame':>16} {'min ms/frame':>13} {'mean count':>11}")
+    for name, m in methods.items():
+        count = m.get("mean_keypoints", m.get("mean_edge_pixels"))
+        print(f"{name:36} {m['median_ms']:16.2f} {m['min_ms']:13.2f} {count:11.1f}")
+
+    ratios = {}
+    print(f"\n{'ratio ours / OpenCV':50} {'median':>7} {'min':>7} {'target':>7}")
+    for ours_name, cv_name, label, target in PAIRS:
+        r = methods[ours_name]["median_ms"] / methods[cv_name]["median_ms"]
+        r_min = methods[ours_name]["min_ms"] / methods[cv_name]["min_ms"]
+        ratios[ours_name + "/" + cv_name] = {"ratio": r, "ratio_min": r_min, "target": target, "label": label}
+        verdict = "" if target is None else ("  met" if r <= target else "  NOT met")
+        print(f"{label:50} {r:7.2f} {r_min:7.2f} {('<= %.1f' % target) if target else '-':>7}{verdict}")
+
+    if args.json_out:
+        report = {
+            "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "commit": args.commit or git_commit(),
+            "cpu": cpu_model(),
+            "frames": [str(f) for f in files],
+            "repeats": args.repeats,
+            "lfast_threads": ours["threads"],
+            "opencv_version": cv2.__version__,
+            "opencv_threads": cv2.getNumThreads(),
+            "loadavg_before": load_before,
+            "loadavg_after": os.getloadavg(),
+            "methods": methods,
+            "ratios": ratios,
+        }
+        args.json_out.parent.mkdir(parents=True, exist_ok=True)
+        args.json_out.write_text(json.dumps(report, indent=2) + "\n")
+        print(f"\nwrote {args.json_out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
