@@ -13,7 +13,7 @@ use std::path::Path;
 pub const MAX_SIDE: u32 = 16384;
 
 /// A dense row-major image of `T`, `data.len() == width * height`.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Plane<T> {
     /// Columns.
     pub width: u32,
@@ -27,6 +27,16 @@ impl<T: Copy + Default> Plane<T> {
     /// A plane filled with `T::default()`.
     pub fn new(width: u32, height: u32) -> Self {
         Self { width, height, data: vec![T::default(); width as usize * height as usize] }
+    }
+}
+
+impl<T: Copy + Default> Plane<T> {
+    /// Makes this a `width x height` plane, reusing the allocation. Contents
+    /// are unspecified afterwards: for buffers a pass overwrites entirely.
+    pub fn reshape(&mut self, width: u32, height: u32) {
+        self.width = width;
+        self.height = height;
+        self.data.resize(width as usize * height as usize, T::default());
     }
 }
 
@@ -133,6 +143,15 @@ impl<'a> GrayView<'a> {
         let s = y as usize * self.stride;
         &self.data[s..s + self.width as usize]
     }
+    /// Copies the pixels into `out`, reusing its allocation.
+    pub fn copy_into(&self, out: &mut Plane<u8>) {
+        out.reshape(self.width, self.height);
+        let w = self.width as usize;
+        for (y, row) in out.data.chunks_exact_mut(w).enumerate() {
+            row.copy_from_slice(self.row(y as u32));
+        }
+    }
+
     /// A dense copy.
     pub fn to_plane(&self) -> Plane<u8> {
         if self.stride == self.width as usize {

@@ -43,14 +43,22 @@ pub fn reflect101(i: i32, len: i32) -> usize {
 /// `out = (sum_y w_y * sum_x w_x * p + 2^15) >> 16`, BORDER_REFLECT_101.
 /// The horizontal sums fit u16 because the weights sum to 256.
 pub fn gaussian_blur(src: &Plane<u8>, kernel: &[u32]) -> Plane<u8> {
+    let mut out = Plane::new(src.width, src.height);
+    gaussian_blur_into(src, kernel, &mut Vec::new(), &mut out);
+    out
+}
+
+/// [`gaussian_blur`] into reused buffers (`tmp` holds the horizontal pass).
+pub fn gaussian_blur_into(src: &Plane<u8>, kernel: &[u32], tmp: &mut Vec<u16>, out: &mut Plane<u8>) {
+    out.reshape(src.width, src.height);
     if src.is_empty() {
-        return src.clone();
+        return;
     }
     match kernel.len() {
-        7 => blur_n::<7>(src, kernel.try_into().expect("length checked")),
-        5 => blur_n::<5>(src, kernel.try_into().expect("length checked")),
-        3 => blur_n::<3>(src, kernel.try_into().expect("length checked")),
-        _ => blur_any(src, kernel),
+        7 => blur_n::<7>(src, kernel.try_into().expect("length checked"), tmp, out),
+        5 => blur_n::<5>(src, kernel.try_into().expect("length checked"), tmp, out),
+        3 => blur_n::<3>(src, kernel.try_into().expect("length checked"), tmp, out),
+        _ => *out = blur_any(src, kernel),
     }
 }
 
@@ -86,11 +94,11 @@ dispatch! {
     }
 }
 
-fn blur_n<const N: usize>(src: &Plane<u8>, kernel: &[u32; N]) -> Plane<u8> {
+fn blur_n<const N: usize>(src: &Plane<u8>, kernel: &[u32; N], tmp: &mut Vec<u16>, out: &mut Plane<u8>) {
     let (w, h) = (src.width as usize, src.height as usize);
     let r = N / 2;
     let k16: [u16; N] = kernel.map(|v| v as u16);
-    let mut tmp = vec![0u16; w * h];
+    tmp.resize(w * h, 0);
     tmp.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         let s = src.row(y as u32);
         let tap = |x: usize| kernel.iter().enumerate().map(|(i, &k)| k as u16 * s[reflect101(x as i32 + i as i32 - r as i32, w as i32)] as u16).sum::<u16>();
@@ -106,7 +114,6 @@ fn blur_n<const N: usize>(src: &Plane<u8>, kernel: &[u32; N]) -> Plane<u8> {
             }
         }
     });
-    let mut out = Plane::<u8>::new(src.width, src.height);
     out.data.par_chunks_mut(w).enumerate().for_each_init(
         || vec![0u32; w],
         |acc, (y, row)| {
@@ -118,7 +125,6 @@ fn blur_n<const N: usize>(src: &Plane<u8>, kernel: &[u32; N]) -> Plane<u8> {
             vround(acc, row);
         },
     );
-    out
 }
 
 /// Any kernel length, straightforward loops (the reference for the fast paths).

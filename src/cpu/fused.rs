@@ -202,17 +202,41 @@ fn bands<'a, T>(data: &'a mut [T], w: usize, cuts: &[u32]) -> Vec<&'a mut [T]> {
     out
 }
 
+/// Buffers of the fused path, reused from frame to frame: allocating them per
+/// frame cost more in page faults than the passes themselves.
+#[derive(Clone, Debug, Default)]
+pub struct EdgeScratch {
+    /// D after [`edges_fused_into`].
+    pub denoised: Plane<u8>,
+    /// E after [`edges_fused_into`].
+    pub edges: Plane<u8>,
+    s: Vec<u32>,
+    sec: Vec<u8>,
+    classes: Plane<u8>,
+    ruled: Plane<u8>,
+}
+
 /// D and E of `img` (SPEC 1-7), equal to [`edge_map`](super::edge_map)'s.
 pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u32) -> FastEdges {
+    let mut sc = EdgeScratch::default();
+    edges_fused_into(img, delta_num, delta_den, alpha_pct, &mut sc);
+    FastEdges { denoised: sc.denoised, edges: sc.edges }
+}
+
+/// [`edges_fused`] into reused buffers: D and E end up in `sc.denoised` and `sc.edges`.
+pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u32, sc: &mut EdgeScratch) {
     let (w, h) = (img.width as usize, img.height as usize);
     if w < 3 || img.is_empty() {
         // The row kernels need an interior; tiny images take the staged path.
         let em = super::edge_map_with(img, delta_num, delta_den, alpha_pct);
-        return FastEdges { denoised: em.denoised, edges: em.edges };
+        sc.denoised = em.denoised;
+        sc.edges = em.edges;
+        return;
     }
+    let EdgeScratch { denoised: d, edges, s, sec, classes, ruled } = sc;
 
     // 1. median
-    let mut d = Plane::<u8>::new(img.width, img.height);
+    d.reshape(img.width, img.height);
     d.data.par_chunks_mut(w).enumerate().for_each_init(
         || vec![0u8; w],
         |flags, (y, out)| {
@@ -230,12 +254,13 @@ pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u
 
     // 2. gradient, sector, cell histograms of M8, one cell row per task
     let layout = Layout::new(img.width, img.height);
-    let mut s = vec![0u32; w * h];
-    let mut sec = vec![0u8; w * h];
+    s.resize(w * h, 0);
+    sec.resize(w * h, 0);
+    let d = &*d;
     let (cx, cy) = (&layout.cx, &layout.cy);
-    let cells: Vec<Vec<[u32; 256]>> = bands(&mut s, w, cy)
+    let cells: Vec<Vec<[u32; 256]>> = bands(s, w, cy)
         .into_par_iter()
-        .zip(bands(&mut sec, w, cy))
+        .zip(bands(sec, w, cy))
         .enumerate()
         .map(|(j, (s_band, sec_band))| {
             let mut band = BandHistograms::new(cx.len() - 1);
@@ -257,7 +282,9 @@ pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u
         }
     }
     let Some(k) = super::otsu::otsu(&hist) else {
-        return FastEdges { denoised: d, edges: Plane::new(img.width, img.height) };
+        edges.reshape(img.width, img.height);
+        edges.data.fill(0);
+        return;
     };
     let t1 = k as u32 + 1;
     let t2 = t1.div_ceil(2); // 2M >= T1  <=>  M >= ceil(T1 / 2)
@@ -282,7 +309,8 @@ pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u
 
     // 4. NMS + classification
     let zeros = vec![0u32; w];
-    let mut classes = Plane::<u8>::new(img.width, img.height);
+    let (s, sec) = (&*s, &*sec);
+    classes.reshape(img.width, img.height);
     classes.data.par_chunks_mut(w).enumerate().for_each(|(y, out)| {
         let row = |yy: usize| &s[yy * w..(yy + 1) * w];
         let su = if y == 0 { &zeros[..] } else { row(y - 1) };
@@ -308,7 +336,8 @@ pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u
 
     // 5. rules, STRONG seeds, hysteresis
     let zeros = vec![0u8; w];
-    let mut ruled = Plane::<u8>::new(img.width, img.height);
+    let classes = &*classes;
+    ruled.reshape(img.width, img.height);
     let seeds: Vec<usize> = ruled
         .data
         .par_chunks_mut(w)
@@ -319,7 +348,7 @@ pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u
             let cd = if y + 1 == h { &zeros[..] } else { row(y + 1) };
             rules_row(cu, row(y), cd, out);
             for x in [0, w - 1] {
-                out[x] = rules::rule_at(&classes, x as u32, y as u32);
+                out[x] = rules::rule_at(classes, x as u32, y as u32);
             }
             let mut seeds = Vec::new();
             for_each_nonzero(out, |x| {
@@ -330,9 +359,8 @@ pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u
             seeds
         })
         .collect();
-    let edges = hysteresis::flood(&ruled, seeds);
+    hysteresis::flood(ruled, &seeds, edges);
     debug_assert!(edges.data.iter().all(|&v| v == 0 || v == EDGE));
-    FastEdges { denoised: d, edges }
 }
 
 #[cfg(test)]

@@ -16,17 +16,21 @@ use crate::image::Plane;
 /// assert_eq!(hysteresis(&c).data, vec![255, 255, 255, 0, 0]);
 /// ```
 pub fn hysteresis(classes: &Plane<u8>) -> Plane<u8> {
-    let seeds = classes.data.iter().enumerate().filter(|&(_, &c)| c == STRONG).map(|(i, _)| i).collect();
-    flood(classes, seeds)
+    let seeds: Vec<usize> = classes.data.iter().enumerate().filter(|&(_, &c)| c == STRONG).map(|(i, _)| i).collect();
+    let mut out = Plane::new(classes.width, classes.height);
+    flood(classes, &seeds, &mut out);
+    out
 }
 
-/// Hysteresis from the given STRONG pixels (linear indices, all of them).
-pub fn flood(classes: &Plane<u8>, seeds: Vec<usize>) -> Plane<u8> {
+/// Hysteresis from the given STRONG pixels (linear indices, all of them)
+/// into `out` (reshaped and cleared here).
+pub fn flood(classes: &Plane<u8>, seeds: &[usize], out: &mut Plane<u8>) {
     let (w, h) = (classes.width as usize, classes.height as usize);
-    let mut out = Plane::<u8>::new(classes.width, classes.height);
+    out.reshape(classes.width, classes.height);
+    out.data.fill(0);
     // (x, y) on the stack: no division per visited pixel
     let mut stack: Vec<(u32, u32)> = Vec::with_capacity(seeds.len());
-    for &i in &seeds {
+    for &i in seeds {
         out.data[i] = EDGE;
         stack.push(((i % w) as u32, (i / w) as u32));
     }
@@ -44,7 +48,6 @@ pub fn flood(classes: &Plane<u8>, seeds: Vec<usize>) -> Plane<u8> {
             }
         }
     }
-    out
 }
 
 #[cfg(test)]

@@ -141,17 +141,43 @@ pub fn edge_map_with(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct:
 /// let (kps, desc) = det.detect_and_compute(img.view(), None).unwrap();
 /// assert!(kps.is_empty() && desc.is_empty()); // a flat image has no corners
 /// ```
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct CpuDetector {
     cfg: Config,
     pattern: &'static Pattern,
     rotated: Option<RotatedPatterns>,
     mask_radius: u32,
+    /// Workspaces of earlier calls, reused so that a frame allocates nothing
+    /// large (fresh buffers cost more in page faults than the passes).
+    pool: std::sync::Mutex<Vec<Workspace>>,
 }
 
-/// A detected corner's level, level-pixel position and Harris response, kept
-/// until description.
-type Found = (Vec<Plane<u8>>, Vec<Corner>);
+impl Clone for CpuDetector {
+    fn clone(&self) -> Self {
+        Self {
+            cfg: self.cfg.clone(),
+            pattern: self.pattern,
+            rotated: self.rotated.clone(),
+            mask_radius: self.mask_radius,
+            pool: Default::default(),
+        }
+    }
+}
+
+/// Per-frame buffers: pyramid levels, the fused edge path's buffers per level,
+/// and the smoothed levels with their blur scratch.
+#[derive(Debug, Default)]
+struct Workspace {
+    levels: Vec<Plane<u8>>,
+    edges: Vec<fused::EdgeScratch>,
+    smooth: Smoothing,
+}
+
+#[derive(Debug, Default)]
+pub(crate) struct Smoothing {
+    levels: Vec<Plane<u8>>,
+    tmp: Vec<Vec<u16>>,
+}
 
 impl CpuDetector {
     /// Validates `cfg` and prepares the rotated patterns.
@@ -162,7 +188,7 @@ impl CpuDetector {
         // A corner's descriptor reads the smoothed image up to the pattern
         // radius (+3 for the 7x7 blur) and its orientation the radius-15 disc.
         let mask_radius = (pattern.radius() + 3).max(orientation::HALF_PATCH) as u32;
-        Ok(Self { cfg, pattern, rotated, mask_radius })
+        Ok(Self { cfg, pattern, rotated, mask_radius, pool: Default::default() })
     }
 
     /// The configuration.
@@ -179,7 +205,13 @@ impl CpuDetector {
     /// fast path; identical to `edges(image)?.edges`.
     pub fn edge_image(&self, image: GrayView<'_>) -> Result<Plane<u8>> {
         image.check()?;
-        Ok(fused::edges_fused(&image.to_plane(), self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct).edges)
+        Ok(self.with_workspace(|ws| {
+            ws.levels.resize_with(1, Default::default);
+            ws.edges.resize_with(1, Default::default);
+            image.copy_into(&mut ws.levels[0]);
+            fused::edges_fused_into(&ws.levels[0], self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct, &mut ws.edges[0]);
+            ws.edges[0].edges.clone()
+        }))
     }
 
     /// The improved Canny edge map of `image` with all its intermediates (the
@@ -193,8 +225,20 @@ impl CpuDetector {
     /// `mask`: any nonzero pixel is "on"; no keypoint lies within
     /// [`mask_radius`](Self::mask_radius) of an "off" pixel, at any level.
     pub fn detect(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<Vec<KeyPoint>> {
-        let (levels, corners) = self.find(image, mask)?;
-        Ok(corners.iter().map(|c| self.keypoint(&levels, c, 0.5).0).collect())
+        self.with_workspace(|ws| {
+            let corners = self.find(image, mask, ws)?;
+            Ok(corners.iter().map(|c| self.keypoint(&ws.levels, c, 0.5).0).collect())
+        })
+    }
+
+    /// Runs `f` with a workspace from the pool, and puts it back.
+    fn with_workspace<R>(&self, f: impl FnOnce(&mut Workspace) -> R) -> R {
+        let mut ws = self.pool.lock().map(|mut p| p.pop()).ok().flatten().unwrap_or_default();
+        let r = f(&mut ws);
+        if let Ok(mut p) = self.pool.lock() {
+            p.push(ws);
+        }
+        r
     }
 
     /// Keypoints and their descriptors (SPEC 1-11); `desc[i]` belongs to `kps[i]`.
@@ -203,8 +247,10 @@ impl CpuDetector {
         image: GrayView<'_>,
         mask: Option<GrayView<'_>>,
     ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
-        let (levels, corners) = self.find(image, mask)?;
-        Ok(self.describe_corners(&levels, &corners, 0.5))
+        self.with_workspace(|ws| {
+            let corners = self.find(image, mask, ws)?;
+            Ok(self.describe_in(&ws.levels, &corners, 0.5, &mut ws.smooth))
+        })
     }
 
     /// Keypoints (SPEC 10, 11) and descriptors of corners found on `levels`.
@@ -216,7 +262,18 @@ impl CpuDetector {
         corners: &[Corner],
         centre: f64,
     ) -> (Vec<KeyPoint>, Vec<Descriptor>) {
-        let smoothed = smooth_used_levels(levels, corners.iter().map(|c| c.level));
+        self.with_workspace(|ws| self.describe_in(levels, corners, centre, &mut ws.smooth))
+    }
+
+    /// [`describe_corners`](Self::describe_corners) with given smoothing buffers.
+    fn describe_in(
+        &self,
+        levels: &[Plane<u8>],
+        corners: &[Corner],
+        centre: f64,
+        smooth: &mut Smoothing,
+    ) -> (Vec<KeyPoint>, Vec<Descriptor>) {
+        let smoothed = smooth_used_levels(levels, corners.iter().map(|c| c.level), smooth);
         corners
             .par_iter()
             .map(|c| {
@@ -253,19 +310,23 @@ impl CpuDetector {
             at.push(Corner { level: l, x: x as u32, y: y as u32, response: kp.response });
         }
         let top = at.iter().map(|c| c.level + 1).max().unwrap_or(1) as usize;
-        let levels = pyramid::pyramid(&image.to_plane(), &sizes[..top]);
-        let smoothed = smooth_used_levels(&levels, at.iter().map(|c| c.level));
-        Ok(at
-            .par_iter()
-            .map(|c| {
-                let (kp, bin) = self.keypoint(&levels, c, 0.5);
-                self.describe(&smoothed[c.level as usize], c.x, c.y, kp.angle, bin)
-            })
-            .collect())
+        Ok(self.with_workspace(|ws| {
+            ws.levels.resize_with(1, Default::default);
+            image.copy_into(&mut ws.levels[0]);
+            pyramid::build_levels(&sizes[..top], &mut ws.levels);
+            let levels = &ws.levels;
+            let smoothed = smooth_used_levels(levels, at.iter().map(|c| c.level), &mut ws.smooth);
+            at.par_iter()
+                .map(|c| {
+                    let (kp, bin) = self.keypoint(levels, c, 0.5);
+                    self.describe(&smoothed[c.level as usize], c.x, c.y, kp.angle, bin)
+                })
+                .collect()
+        }))
     }
 
     /// SPEC 1-9 on every level: the pyramid and the selected corners in SPEC 9 order.
-    fn find(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<Found> {
+    fn find(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>, ws: &mut Workspace) -> Result<Vec<Corner>> {
         image.check()?;
         if let Some(m) = mask {
             m.check()?;
@@ -281,7 +342,11 @@ impl CpuDetector {
             });
         }
         let sizes = self.cfg.level_sizes(image.width(), image.height());
-        let levels = pyramid::pyramid(&image.to_plane(), &sizes);
+        ws.levels.resize_with(1, Default::default);
+        image.copy_into(&mut ws.levels[0]);
+        pyramid::build_levels(&sizes, &mut ws.levels);
+        ws.edges.resize_with(sizes.len(), Default::default);
+        let levels = &ws.levels;
         let masks: Option<Vec<Plane<u8>>> = mask.map(|m| {
             let m = m.to_plane();
             sizes.par_iter().map(|&(w, h)| level_mask(&m, w, h, self.mask_radius)).collect()
@@ -289,13 +354,14 @@ impl CpuDetector {
         let params = lfast::LfastParams::from_config(&self.cfg);
         let per_level: Vec<Vec<Corner>> = levels
             .par_iter()
+            .zip(ws.edges.par_iter_mut())
             .enumerate()
-            .map(|(l, img)| {
+            .map(|(l, (img, em))| {
                 let b = params.border;
                 if img.width <= 2 * b || img.height <= 2 * b {
                     return Vec::new();
                 }
-                let em = fused::edges_fused(img, self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct);
+                fused::edges_fused_into(img, self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct, em);
                 let cands = lfast::lfast(&em.edges, masks.as_ref().map(|m| &m[l]), &params);
                 let resp = response::responses(&em.denoised, &cands);
                 corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
@@ -304,8 +370,7 @@ impl CpuDetector {
                     .collect()
             })
             .collect();
-        let corners = select::select(per_level, &sizes, self.cfg.n_features, self.cfg.distribution);
-        Ok((levels, corners))
+        Ok(select::select(per_level, &sizes, self.cfg.n_features, self.cfg.distribution))
     }
 
     /// The keypoint of a corner (SPEC 10) with its angle, and its orientation bin.
@@ -332,15 +397,18 @@ impl CpuDetector {
     }
 }
 
-/// The 7x7 sigma-2 blur of each level some corner uses (others stay empty).
-fn smooth_used_levels(levels: &[Plane<u8>], used: impl Iterator<Item = u32>) -> Vec<Plane<u8>> {
+/// The 7x7 sigma-2 blur of each level some corner uses (others are left stale).
+fn smooth_used_levels<'a>(levels: &[Plane<u8>], used: impl Iterator<Item = u32>, sm: &'a mut Smoothing) -> &'a [Plane<u8>] {
     let mut need = vec![false; levels.len()];
     used.for_each(|l| need[l as usize] = true);
-    levels
-        .par_iter()
-        .zip(need)
-        .map(|(lv, n)| if n { blur::gaussian_blur(lv, &blur::ORB_KERNEL) } else { Plane::new(0, 0) })
-        .collect()
+    sm.levels.resize_with(levels.len(), Default::default);
+    sm.tmp.resize_with(levels.len(), Default::default);
+    levels.par_iter().zip(need).zip(sm.levels.par_iter_mut().zip(sm.tmp.par_iter_mut())).for_each(|((lv, n), (out, tmp))| {
+        if n {
+            blur::gaussian_blur_into(lv, &blur::ORB_KERNEL, tmp, out);
+        }
+    });
+    &sm.levels[..levels.len()]
 }
 
 /// The mask at a `w x h` level: a level pixel is on only if every input pixel

@@ -41,8 +41,17 @@ pub fn tap(d: u32, src_len: u32, dst_len: u32) -> (u32, i32) {
 /// Resizes `src` to `dw x dh` (bilinear, Q11 weights, result rounded):
 /// `out = (wy0 * (wx0*p00 + wx1*p01) + wy1 * (wx0*p10 + wx1*p11) + 2^21) >> 22`.
 pub fn resize(src: &Plane<u8>, dw: u32, dh: u32) -> Plane<u8> {
+    let mut out = Plane::new(dw, dh);
+    resize_into(src, dw, dh, &mut out);
+    out
+}
+
+/// [`resize`] into a reused buffer.
+pub fn resize_into(src: &Plane<u8>, dw: u32, dh: u32, out: &mut Plane<u8>) {
+    out.reshape(dw, dh);
     if src.is_empty() || dw == 0 || dh == 0 {
-        return Plane::new(dw, dh); // nothing to sample
+        out.data.fill(0); // nothing to sample
+        return;
     }
     let (sx, wx): (Vec<u32>, Vec<i32>) = (0..dw).map(|x| tap(x, src.width, dw)).unzip();
     let sx1: Vec<u32> = sx.iter().map(|&s| (s + 1).min(src.width - 1)).collect();
@@ -55,7 +64,6 @@ pub fn resize(src: &Plane<u8>, dw: u32, dh: u32) -> Plane<u8> {
         }
     };
     const BAND: usize = 16;
-    let mut out = Plane::<u8>::new(dw, dh);
     out.data.par_chunks_mut(w * BAND).enumerate().for_each(|(band, rows)| {
         // the two source rows last interpolated, reused by the next destination row
         let (mut h0, mut h1) = (vec![0i32; w], vec![0i32; w]);
@@ -79,7 +87,6 @@ pub fn resize(src: &Plane<u8>, dw: u32, dh: u32) -> Plane<u8> {
             vblend(&h0, &h1, wy, row);
         }
     });
-    out
 }
 
 dispatch! {
@@ -113,12 +120,27 @@ pub fn resize_naive(src: &Plane<u8>, dw: u32, dh: u32) -> Plane<u8> {
 /// All levels: level 0 is `base` itself, level l is resized from level l-1
 /// to `sizes[l]` (from [`Config::level_sizes`](crate::Config::level_sizes)).
 pub fn pyramid(base: &Plane<u8>, sizes: &[(u32, u32)]) -> Vec<Plane<u8>> {
-    let mut levels: Vec<Plane<u8>> = Vec::with_capacity(sizes.len());
-    for (l, &(w, h)) in sizes.iter().enumerate() {
-        let next = if l == 0 { base.clone() } else { resize(&levels[l - 1], w, h) };
-        levels.push(next);
-    }
+    let mut levels = Vec::new();
+    pyramid_into(base, sizes, &mut levels);
     levels
+}
+
+/// [`pyramid`] into reused level buffers.
+pub fn pyramid_into(base: &Plane<u8>, sizes: &[(u32, u32)], levels: &mut Vec<Plane<u8>>) {
+    levels.resize_with(sizes.len().max(1), Default::default);
+    levels[0].reshape(base.width, base.height);
+    levels[0].data.copy_from_slice(&base.data);
+    build_levels(sizes, levels);
+}
+
+/// Levels 1.. of a pyramid whose level 0 is already in `levels[0]`.
+pub fn build_levels(sizes: &[(u32, u32)], levels: &mut Vec<Plane<u8>>) {
+    levels.resize_with(sizes.len().max(1), Default::default);
+    levels.truncate(sizes.len().max(1));
+    for (l, &(w, h)) in sizes.iter().enumerate().skip(1) {
+        let (done, rest) = levels.split_at_mut(l);
+        resize_into(&done[l - 1], w, h, &mut rest[0]);
+    }
 }
 
 #[cfg(test)]
