@@ -40,23 +40,25 @@ pub fn moments(img: &Plane<u8>, x: u32, y: u32) -> (i32, i32) {
     let inside = x >= HALF_PATCH && y >= HALF_PATCH && x + HALF_PATCH < img.width as i32 && y + HALF_PATCH < img.height as i32;
     let (mut m10, mut m01) = (0i32, 0i32);
     if inside {
+        // Row slices around the centre: the inner loops vectorise.
         let w = img.width as usize;
         let c = y as usize * w + x as usize;
         let d = &img.data;
-        for u in -HALF_PATCH..=HALF_PATCH {
-            m10 += u * d[(c as isize + u as isize) as usize] as i32;
+        let h = HALF_PATCH as usize;
+        for (k, &p) in d[c - h..=c + h].iter().enumerate() {
+            m10 += (k as i32 - HALF_PATCH) * p as i32;
         }
-        for v in 1..=HALF_PATCH {
+        for v in 1..=h {
+            let r = UMAX[v] as usize;
+            let (up, down) = (c - v * w, c + v * w);
+            let (plus, minus) = (&d[down - r..=down + r], &d[up - r..=up + r]);
             let mut v_sum = 0;
-            let r = UMAX[v as usize];
-            let (up, down) = (c - v as usize * w, c + v as usize * w);
-            for u in -r..=r {
-                let plus = d[(down as isize + u as isize) as usize] as i32;
-                let minus = d[(up as isize + u as isize) as usize] as i32;
-                v_sum += plus - minus;
-                m10 += u * (plus + minus);
+            for (k, (&p, &m)) in plus.iter().zip(minus).enumerate() {
+                let (p, m) = (p as i32, m as i32);
+                v_sum += p - m;
+                m10 += (k as i32 - r as i32) * (p + m);
             }
-            m01 += v * v_sum;
+            m01 += v as i32 * v_sum;
         }
     } else {
         for u in -HALF_PATCH..=HALF_PATCH {

@@ -55,12 +55,17 @@ pub fn resize_into(src: &Plane<u8>, dw: u32, dh: u32, out: &mut Plane<u8>) {
     }
     let (sx, wx): (Vec<u32>, Vec<i32>) = (0..dw).map(|x| tap(x, src.width, dw)).unzip();
     let sx1: Vec<u32> = sx.iter().map(|&s| (s + 1).min(src.width - 1)).collect();
+    // Source columns are non-decreasing in x (tap is monotone and clamped), so
+    // the last entries bound every read of the gather loop below.
+    assert!(sx.iter().zip(&sx1).all(|(a, b)| a <= b) && sx1.last().is_none_or(|&v| v < src.width));
     let w = dw as usize;
     // horizontal taps of source row `sy` at every destination column
     let hrow = |sy: u32, out: &mut [i32]| {
         let r = src.row(sy);
         for (((o, &s0), &s1), &k) in out.iter_mut().zip(&sx).zip(&sx1).zip(&wx) {
-            *o = (ONE - k) * r[s0 as usize] as i32 + k * r[s1 as usize] as i32;
+            // SAFETY: s0 <= s1 <= sx1.last() < src.width == r.len(), asserted in `resize_into`.
+            let (a, b) = unsafe { (*r.get_unchecked(s0 as usize), *r.get_unchecked(s1 as usize)) };
+            *o = (ONE - k) * a as i32 + k * b as i32;
         }
     };
     const BAND: usize = 16;
