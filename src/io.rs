@@ -58,3 +58,121 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         io(e)
     })
 }
+
+/// One row of text per keypoint: `x,y,size,angle,response,octave,class_id,descriptor`
+/// (OpenCV KeyPoint fields, then the descriptor as 64 hex digits), with a header line.
+///
+/// ```
+/// let kp = lfast::KeyPoint::new(1.5, 2.5, 31.0);
+/// let csv = lfast::io::features_csv(&[kp], &[[0u8; 32]]);
+/// assert!(csv.starts_with("x,y,size,angle,response,octave,class_id,descriptor\n1.5,2.5,31,-1,0,0,-1,00"));
+/// ```
+pub fn features_csv(kps: &[KeyPoint], desc: &[Descriptor]) -> String {
+    let mut s = String::from("x,y,size,angle,response,octave,class_id,descriptor\n");
+    for (i, k) in kps.iter().enumerate() {
+        let d = desc.get(i).map(hex).unwrap_or_default();
+        s.push_str(&format!(
+            "{},{},{},{},{},{},{},{d}\n",
+            k.pt.x, k.pt.y, k.size, k.angle, k.response, k.octave, k.class_id
+        ));
+    }
+    s
+}
+
+/// A NumPy `.npy` (format version 1.0) file of a C-order 2-D array:
+/// `descr` is the dtype (`"<f4"`, `"|u1"`), `data` the little-endian bytes.
+fn npy(descr: &str, rows: usize, cols: usize, data: &[u8]) -> Vec<u8> {
+    let mut header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': ({rows}, {cols}), }}");
+    // magic (6) + version (2) + header length (2) + header, padded with spaces
+    // and ended by '\n' to a multiple of 64 bytes.
+    let unpadded = 10 + header.len() + 1;
+    header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
+    header.push('\n');
+    let mut out = Vec::with_capacity(10 + header.len() + data.len());
+    out.extend_from_slice(b"\x93NUMPY\x01\x00");
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(data);
+    out
+}
+
+/// Keypoints as a `.npy` float32 array of shape (N, 7): x, y, size, angle,
+/// response, octave, class_id.
+///
+/// ```
+/// let b = lfast::io::keypoints_npy(&[lfast::KeyPoint::new(1.0, 2.0, 7.0)]);
+/// assert!(b.starts_with(b"\x93NUMPY\x01\x00"));
+/// let hlen = u16::from_le_bytes([b[8], b[9]]) as usize;
+/// assert_eq!((10 + hlen) % 64, 0);
+/// assert!(std::str::from_utf8(&b[10..10 + hlen]).unwrap().contains("'shape': (1, 7)"));
+/// assert_eq!(b.len(), 10 + hlen + 7 * 4);
+/// ```
+pub fn keypoints_npy(kps: &[KeyPoint]) -> Vec<u8> {
+    let mut data = Vec::with_capacity(kps.len() * 7 * 4);
+    for k in kps {
+        for v in [k.pt.x, k.pt.y, k.size, k.angle, k.response, k.octave as f32, k.class_id as f32] {
+            data.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    npy("<f4", kps.len(), 7, &data)
+}
+
+/// Descriptors as a `.npy` uint8 array of shape (N, 32).
+pub fn descriptors_npy(desc: &[Descriptor]) -> Vec<u8> {
+    npy("|u1", desc.len(), 32, desc.as_flattened())
+}
+
+/// A float in a form OpenCV's YAML reader takes as a real (always a `.` or an exponent).
+fn yaml_real(v: f32) -> String {
+    if v.is_finite() {
+        format!("{v:?}")
+    } else if v.is_nan() {
+        ".Nan".into()
+    } else if v > 0.0 {
+        ".Inf".into()
+    } else {
+        "-.Inf".into()
+    }
+}
+
+/// OpenCV FileStorage YAML (`cv2.FileStorage(path, cv2.FILE_STORAGE_READ)` reads
+/// it): `keypoints`, one `[x, y, size, angle, response, octave, class_id]`
+/// sequence per keypoint as `cv::write(fs, name, keypoints)` writes them, and
+/// `descriptors`, an N x 32 `CV_8U` `!!opencv-matrix`.
+///
+/// ```
+/// let y = lfast::io::features_yaml(&[lfast::KeyPoint::new(1.0, 2.0, 7.0)], &[[7u8; 32]]);
+/// assert!(y.starts_with("%YAML:1.0\n---\n"));
+/// assert!(y.contains("rows: 1") && y.contains("cols: 32") && y.contains("dt: u"));
+/// ```
+pub fn features_yaml(kps: &[KeyPoint], desc: &[Descriptor]) -> String {
+    let mut s = String::from("%YAML:1.0\n---\n");
+    if kps.is_empty() {
+        s.push_str("keypoints: []\n");
+    } else {
+        s.push_str("keypoints:\n");
+        for k in kps {
+            s.push_str(&format!(
+                "   - [ {}, {}, {}, {}, {}, {}, {} ]\n",
+                yaml_real(k.pt.x),
+                yaml_real(k.pt.y),
+                yaml_real(k.size),
+                yaml_real(k.angle),
+                yaml_real(k.response),
+                k.octave,
+                k.class_id
+            ));
+        }
+    }
+    s.push_str(&format!("descriptors: !!opencv-matrix\n   rows: {}\n   cols: 32\n   dt: u\n   data: [", desc.len()));
+    let bytes = desc.as_flattened();
+    for (i, b) in bytes.iter().enumerate() {
+        if i > 0 {
+            s.push(',');
+        }
+        s.push_str(if i % 32 == 0 { "\n       " } else { " " });
+        s.push_str(&b.to_string());
+    }
+    s.push_str(" ]\n");
+    s
+}

@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod baseline;
+pub mod cli;
 pub mod config;
 pub mod cpu;
 pub mod error;

@@ -54,9 +54,14 @@ fn detect_writes_features_json() {
     assert_eq!(f.keypoints.len(), f.descriptors.len());
     assert!(f.descriptors.iter().all(|d| d.len() == 64 && d.chars().all(|c| c.is_ascii_hexdigit())));
     assert!(f.image.ends_with("coins.png"), "{}", f.image);
-    let line = stdout(&o);
-    assert_eq!(line.lines().count(), 1, "{line:?}");
+    // one line for the file, then the summary
+    let text = stdout(&o);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 2, "{text:?}");
+    let line = lines[0];
     assert!(line.contains(&f.keypoints.len().to_string()) && line.contains("coins.json"), "{line:?}");
+    assert!(lines[1].starts_with("summary: done 1, skipped 0, failed 0"), "{text:?}");
+    assert!(lines[1].contains(&format!("{} keypoints", f.keypoints.len())), "{text:?}");
     // no temporary file is left next to the output
     let names: Vec<String> =
         std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();

@@ -1,0 +1,302 @@
+//! `lfast detect`: a pipelined batch over many images. Decoder threads read
+//! and decode files, the detector works on frames in a rayon pool (`--jobs`),
+//! and the calling thread encodes and writes the outputs, all linked by
+//! bounded channels so that the stages overlap and memory stays bounded.
+
+use super::inputs::{self, Input, Shard};
+use super::report::{self, Reporter};
+use super::{CliError, Common};
+use crate::baseline::fast::fast9;
+use crate::baseline::orb::{OrbDetector, OrbParams};
+use crate::config::Config;
+use crate::cpu::CpuDetector;
+use crate::image::Plane;
+use crate::{Descriptor, KeyPoint};
+use clap::ValueEnum;
+use rayon::iter::{ParallelBridge, ParallelIterator};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc::sync_channel;
+
+pub(super) const AFTER_HELP: &str = "\
+Outputs, for an input IMG (or DIR/sub/IMG found under a directory DIR, which keeps sub/):
+  json  OUT/IMG.json                 OpenCV KeyPoint field names, descriptors as hex
+  csv   OUT/IMG.csv                  x,y,size,angle,response,octave,class_id,descriptor
+  npy   OUT/IMG.keypoints.npy        float32 Nx7 (x, y, size, angle, response, octave, class_id)
+        OUT/IMG.descriptors.npy      uint8 Nx32
+  yaml  OUT/IMG.yaml                 OpenCV FileStorage: keypoints, descriptors (CV_8U matrix)
+  --draw OUT/IMG.draw.png            keypoints drawn as circles of their size with orientation
+Outputs are written atomically (temporary file + rename). --shard K/N takes files
+i % N == K of the sorted input list, K 0-based (0/4, 1/4, 2/4, 3/4).
+Exit code: 0 all done or skipped, 1 some files failed, 2 the run could not start.";
+
+/// Output format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(super) enum Format {
+    /// IMG.json: the features with OpenCV KeyPoint field names
+    Json,
+    /// IMG.csv: one keypoint per row
+    Csv,
+    /// IMG.keypoints.npy (float32 Nx7) and IMG.descriptors.npy (uint8 Nx32)
+    Npy,
+    /// IMG.yaml: OpenCV FileStorage
+    Yaml,
+}
+
+/// Which detector runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(super) enum DetectorKind {
+    /// L-FAST on the improved Canny edge map, with ORB descriptors
+    Lfast,
+    /// OpenCV-exact FAST-9 on the full image (threshold --fast-threshold), with ORB descriptors
+    Fast,
+    /// The ORB baseline (FAST-9 + Harris over the pyramid), as cv2.ORB_create
+    Orb,
+}
+
+#[derive(clap::Args)]
+pub(super) struct DetectArgs {
+    /// Images, directories (searched recursively for image files) or glob patterns
+    inputs: Vec<PathBuf>,
+    /// Also read inputs from FILE, one per line (`-` = standard input)
+    #[arg(long, value_name = "FILE")]
+    from_list: Option<PathBuf>,
+    /// Output directory (created if missing)
+    #[arg(long, short = 'o', value_name = "DIR")]
+    out: PathBuf,
+    /// Output formats, comma-separated or repeated
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Format::Json])]
+    format: Vec<Format>,
+    /// Also write IMG.draw.png, the keypoints drawn on the image
+    #[arg(long)]
+    draw: bool,
+    /// Skip inputs whose outputs all exist already
+    #[arg(long)]
+    skip_existing: bool,
+    /// Process only shard K of N (K 0-based): files i % N == K of the sorted list
+    #[arg(long, value_name = "K/N")]
+    shard: Option<Shard>,
+    /// Detector
+    #[arg(long, value_enum, default_value_t = DetectorKind::Lfast)]
+    detector: DetectorKind,
+    /// FAST threshold of --detector fast and orb
+    #[arg(long, default_value_t = 20)]
+    fast_threshold: i32,
+    #[command(flatten)]
+    common: Common,
+}
+
+/// A detector of any kind.
+enum Det {
+    Lfast(CpuDetector),
+    Fast { describe: CpuDetector, threshold: i32, cap: u32 },
+    Orb(OrbDetector),
+}
+
+impl Det {
+    fn new(kind: DetectorKind, cfg: Config, fast_threshold: i32) -> Result<Self, CliError> {
+        Ok(match kind {
+            DetectorKind::Lfast => Det::Lfast(CpuDetector::new(cfg)?),
+            DetectorKind::Fast => {
+                let cap = cfg.n_features;
+                Det::Fast { describe: CpuDetector::new(cfg)?, threshold: fast_threshold, cap }
+            }
+            DetectorKind::Orb => {
+                let d = OrbParams::default();
+                let params = OrbParams {
+                    n_features: if cfg.n_features > 0 { cfg.n_features } else { d.n_features },
+                    n_levels: cfg.n_levels,
+                    scale_factor: cfg.scale_factor,
+                    fast_threshold,
+                    ..d
+                };
+                Det::Orb(OrbDetector::new(params)?)
+            }
+        })
+    }
+
+    fn name(&self) -> &'static str {
+        match self {
+            Det::Lfast(_) => "lfast",
+            Det::Fast { .. } => "fast",
+            Det::Orb(_) => "orb",
+        }
+    }
+
+    fn run(&self, img: &Plane<u8>) -> crate::Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
+        match self {
+            Det::Lfast(d) => d.detect_and_compute(img.view(), None),
+            Det::Orb(d) => d.detect_and_compute(img.view()),
+            Det::Fast { describe, threshold, cap } => {
+                img.view().check()?;
+                let mut kps = fast9(img, *threshold, true);
+                if *cap > 0 {
+                    kps.sort_by(|a, b| b.response.total_cmp(&a.response));
+                    kps.truncate(*cap as usize);
+                }
+                let desc = describe.compute(img.view(), &kps)?;
+                Ok((kps, desc))
+            }
+        }
+    }
+}
+
+/// What one file has become so far, passed between the stages.
+enum Stage {
+    Skip,
+    Failed(String),
+    Decoded(Plane<u8>),
+    Detected { width: u32, height: u32, kps: Vec<KeyPoint>, desc: Vec<Descriptor>, img: Option<Plane<u8>> },
+}
+
+/// `base` + `suffix`, e.g. `out/sub/img` + `.json`.
+fn with_suffix(base: &Path, suffix: &str) -> PathBuf {
+    let mut s = base.as_os_str().to_owned();
+    s.push(suffix);
+    PathBuf::from(s)
+}
+
+/// The output files of one input, in the order they are written.
+fn outputs(base: &Path, formats: &[Format], draw: bool) -> Vec<PathBuf> {
+    let mut v = Vec::new();
+    for f in formats {
+        match f {
+            Format::Json => v.push(with_suffix(base, ".json")),
+            Format::Csv => v.push(with_suffix(base, ".csv")),
+            Format::Npy => {
+                v.push(with_suffix(base, ".keypoints.npy"));
+                v.push(with_suffix(base, ".descriptors.npy"));
+            }
+            Format::Yaml => v.push(with_suffix(base, ".yaml")),
+        }
+    }
+    if draw {
+        v.push(with_suffix(base, ".draw.png"));
+    }
+    v
+}
+
+struct Job<'a> {
+    input: &'a Input,
+    outputs: Vec<PathBuf>,
+}
+
+/// Encodes and writes every output of one file; returns the first output.
+fn write_all(job: &Job, formats: &[Format], st: &Stage) -> crate::Result<()> {
+    let Stage::Detected { width, height, kps, desc, img } = st else { return Ok(()) };
+    let mut outs = job.outputs.iter();
+    let mut put = |bytes: &[u8]| -> crate::Result<()> {
+        let p = outs.next().expect("one output path per encoded file");
+        if let Some(dir) = p.parent() {
+            std::fs::create_dir_all(dir).map_err(|source| crate::Error::Io { path: dir.to_path_buf(), source })?;
+        }
+        crate::io::write_atomic(p, bytes)
+    };
+    for f in formats {
+        match f {
+            Format::Json => put(crate::io::features_json(&job.input.path, *width, *height, kps, desc).as_bytes())?,
+            Format::Csv => put(crate::io::features_csv(kps, desc).as_bytes())?,
+            Format::Npy => {
+                put(&crate::io::keypoints_npy(kps))?;
+                put(&crate::io::descriptors_npy(desc))?;
+            }
+            Format::Yaml => put(crate::io::features_yaml(kps, desc).as_bytes())?,
+        }
+    }
+    if let Some(img) = img {
+        put(&super::draw::overlay_png(img, kps)?)?;
+    }
+    Ok(())
+}
+
+/// Runs `lfast detect`; `Ok(false)` when some file failed.
+pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
+    let backend = a.common.backend()?;
+    let cfg = a.common.config()?;
+    let det = Det::new(a.detector, cfg, a.fast_threshold)?;
+    let pool = a.common.pool()?;
+    super::report::prepare_out_dir(&a.out)?;
+    let all = inputs::collect(&a.inputs, a.from_list.as_deref(), &a.out)?;
+    let mine = inputs::shard(all, a.shard);
+    let mut formats: Vec<Format> = Vec::new();
+    for f in &a.format {
+        if !formats.contains(f) {
+            formats.push(*f);
+        }
+    }
+    let jobs: Vec<Job> =
+        mine.iter().map(|i| Job { input: i, outputs: outputs(&a.out.join(&i.rel), &formats, a.draw) }).collect();
+
+    let mut rep = Reporter::new(jobs.len() as u64, a.common.quiet);
+    let threads = pool.current_num_threads().max(1);
+    let decoders = (threads / 2).clamp(1, 4);
+    let next = AtomicUsize::new(0);
+    let (skip_existing, draw) = (a.skip_existing, a.draw);
+    std::thread::scope(|s| {
+        let (jobs, next, det) = (&jobs, &next, &det);
+        let (tx_dec, rx_dec) = sync_channel::<(usize, Stage)>(2 * threads);
+        let (tx_det, rx_det) = sync_channel::<(usize, Stage)>(2 * threads);
+        // stage 1: decode
+        for _ in 0..decoders {
+            let tx = tx_dec.clone();
+            s.spawn(move || {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(job) = jobs.get(i) else { break };
+                    let st = if let Some(p) = &job.input.problem {
+                        Stage::Failed(p.clone())
+                    } else if skip_existing && job.outputs.iter().all(|p| p.is_file()) {
+                        Stage::Skip
+                    } else {
+                        match crate::image::load_gray(&job.input.path) {
+                            Ok(img) => Stage::Decoded(img),
+                            Err(e) => Stage::Failed(report::reason(&e)),
+                        }
+                    };
+                    if tx.send((i, st)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx_dec);
+        // stage 2: detect, several frames at once in the pool
+        s.spawn(move || {
+            pool.install(|| {
+                rx_dec.into_iter().par_bridge().for_each(|(i, st)| {
+                    let st = match st {
+                        Stage::Decoded(img) => match det.run(&img) {
+                            Ok((kps, desc)) => Stage::Detected {
+                                width: img.width,
+                                height: img.height,
+                                kps,
+                                desc,
+                                img: draw.then_some(img),
+                            },
+                            Err(e) => Stage::Failed(report::reason(&e)),
+                        },
+                        other => other,
+                    };
+                    let _ = tx_det.send((i, st));
+                })
+            })
+        });
+        // stage 3 (this thread): encode, write, report
+        for (i, st) in rx_det {
+            let job = &jobs[i];
+            match &st {
+                Stage::Skip => rep.skipped(|| format!("{}: skipped (outputs exist)", job.input.path.display())),
+                Stage::Failed(reason) => rep.failed(&job.input.path, reason),
+                Stage::Detected { kps, .. } => match write_all(job, &formats, &st) {
+                    Ok(()) => rep.done(kps.len() as u64, || {
+                        format!("{}: {} keypoints -> {}", job.input.path.display(), kps.len(), job.outputs[0].display())
+                    }),
+                    Err(e) => rep.failed(&job.input.path, &e.to_string()),
+                },
+                Stage::Decoded(_) => rep.failed(&job.input.path, "internal error: not detected"),
+            }
+        }
+    });
+    let tail = format!("backend {backend}, detector {}, {threads} threads", det.name());
+    Ok(rep.finish("keypoints", &tail))
+}

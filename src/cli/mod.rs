@@ -1,0 +1,184 @@
+//! The `lfast` command line: `detect`, `edges` and `info`. `src/main.rs` only
+//! calls [`main`]; everything else lives here so it can be tested and reused.
+//!
+//! Exit codes: 0 when every file was done (or skipped), 1 when at least one
+//! input failed (the others are still processed), 2 when the run could not
+//! start at all (bad arguments or config, no inputs, an unwritable output
+//! directory, `--backend gpu` in a build without a GPU backend).
+
+mod detect;
+mod draw;
+mod edges;
+mod info;
+mod inputs;
+mod report;
+
+use crate::config::{Config, Mode};
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Errors that stop a run before (or instead of) any per-file work.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    /// An error from the library (config, I/O).
+    #[error(transparent)]
+    Lib(#[from] crate::Error),
+    /// `--backend gpu` in a build without the GPU backend.
+    #[error("the GPU backend is not available in this build")]
+    GpuUnavailable,
+    /// The output directory cannot be created or written to.
+    #[error("output directory {path}: {reason}")]
+    OutDir {
+        /// The directory.
+        path: PathBuf,
+        /// Why it cannot be used.
+        reason: String,
+    },
+    /// A list file cannot be read, a glob is malformed, or nothing matched.
+    #[error("{0}")]
+    Inputs(String),
+    /// Inconsistent options.
+    #[error("{0}")]
+    Usage(String),
+}
+
+#[derive(Parser)]
+#[command(name = "lfast", version, about = "L-FAST feature detector (improved Canny + L-FAST + ORB)")]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+/// Where detection runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Backend {
+    /// The GPU when one is built in and found, else the CPU (this build: the CPU).
+    Auto,
+    /// The GPU backend (not in this build: fails at once).
+    Gpu,
+    /// The CPU reference path.
+    Cpu,
+}
+
+#[derive(clap::Args, Clone)]
+struct Common {
+    /// TOML file with detector parameters (see docs/algorithm.md); flags override it
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// L-FAST mode: paper or branch
+    #[arg(long)]
+    mode: Option<Mode>,
+    /// Keypoint cap over all levels (0 = none)
+    #[arg(long)]
+    n_features: Option<u32>,
+    /// Pyramid levels
+    #[arg(long)]
+    n_levels: Option<u32>,
+    /// Pyramid scale between levels
+    #[arg(long)]
+    scale_factor: Option<f64>,
+    /// Local-threshold spread alpha, in hundredths
+    #[arg(long)]
+    alpha_pct: Option<u32>,
+    /// Backend: auto, gpu or cpu (this build has only the CPU backend)
+    #[arg(long, value_enum, default_value_t = Backend::Auto)]
+    backend: Backend,
+    /// GPU adapter name (only with --backend gpu or auto)
+    #[arg(long, value_name = "NAME")]
+    adapter: Option<String>,
+    /// Worker threads (default: all cores)
+    #[arg(long, short = 'j', value_name = "N")]
+    jobs: Option<usize>,
+    /// No progress bar or per-file lines; errors and the summary only
+    #[arg(long, short = 'q')]
+    quiet: bool,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Detect keypoints and descriptors in images, directories (recursive) or globs
+    #[command(after_help = detect::AFTER_HELP)]
+    Detect(detect::DetectArgs),
+    /// Write the improved Canny edge map of each input as a PNG
+    #[command(after_help = edges::AFTER_HELP)]
+    Edges(edges::EdgesArgs),
+    /// Backends, adapters and CPU features of this build
+    Info,
+}
+
+impl Common {
+    /// The detector configuration: the file, then the flags over it, validated.
+    fn config(&self) -> Result<Config, CliError> {
+        let mut cfg = match &self.config {
+            Some(p) => Config::load(p)?,
+            None => Config::default(),
+        };
+        cfg.mode = self.mode.unwrap_or(cfg.mode);
+        cfg.n_features = self.n_features.unwrap_or(cfg.n_features);
+        cfg.n_levels = self.n_levels.unwrap_or(cfg.n_levels);
+        cfg.scale_factor = self.scale_factor.unwrap_or(cfg.scale_factor);
+        cfg.alpha_pct = self.alpha_pct.unwrap_or(cfg.alpha_pct);
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    /// Checks `--backend` and `--adapter`; returns the name of the backend used.
+    fn backend(&self) -> Result<&'static str, CliError> {
+        match (self.backend, &self.adapter) {
+            (Backend::Gpu, _) => Err(CliError::GpuUnavailable),
+            (Backend::Cpu, Some(_)) => {
+                Err(CliError::Usage("--adapter needs --backend gpu or auto (--backend cpu has no adapters)".into()))
+            }
+            (Backend::Auto, Some(name)) => {
+                eprintln!("lfast: note: --adapter {name} ignored: no GPU backend in this build, using the CPU");
+                Ok("cpu")
+            }
+            _ => Ok("cpu"),
+        }
+    }
+
+    /// A rayon pool with `--jobs` threads (all cores by default).
+    fn pool(&self) -> Result<rayon::ThreadPool, CliError> {
+        if self.jobs == Some(0) {
+            return Err(CliError::Usage("--jobs must be at least 1".into()));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(self.jobs.unwrap_or(0))
+            .build()
+            .map_err(|e| CliError::Usage(format!("cannot start {} worker threads: {e}", self.jobs.unwrap_or(0))))
+    }
+}
+
+/// Runs the command line `args` (including the program name); returns the exit code.
+pub fn run_from<I, T>(args: I) -> ExitCode
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
+        }
+    };
+    let r = match cli.cmd {
+        Cmd::Detect(a) => detect::run(a),
+        Cmd::Edges(a) => edges::run(a),
+        Cmd::Info => info::run(),
+    };
+    match r {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
+        Err(e) => {
+            eprintln!("lfast: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// The `lfast` binary's entry point: parses `std::env::args_os()` and runs.
+pub fn main() -> ExitCode {
+    run_from(std::env::args_os())
+}
