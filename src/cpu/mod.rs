@@ -342,34 +342,46 @@ impl CpuDetector {
             });
         }
         let sizes = self.cfg.level_sizes(image.width(), image.height());
-        ws.levels.resize_with(1, Default::default);
+        let n = sizes.len();
+        ws.levels.resize_with(n, Default::default);
+        ws.levels.truncate(n);
+        ws.edges.resize_with(n, Default::default);
         image.copy_into(&mut ws.levels[0]);
-        pyramid::build_levels(&sizes, &mut ws.levels);
-        ws.edges.resize_with(sizes.len(), Default::default);
-        let levels = &ws.levels;
         let masks: Option<Vec<Plane<u8>>> = mask.map(|m| {
             let m = m.to_plane();
             sizes.par_iter().map(|&(w, h)| level_mask(&m, w, h, self.mask_radius)).collect()
         });
         let params = lfast::LfastParams::from_config(&self.cfg);
-        let per_level: Vec<Vec<Corner>> = levels
-            .par_iter()
-            .zip(ws.edges.par_iter_mut())
-            .enumerate()
-            .map(|(l, (img, em))| {
-                let b = params.border;
-                if img.width <= 2 * b || img.height <= 2 * b {
-                    return Vec::new();
-                }
-                fused::edges_fused_into(img, self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct, em);
-                let cands = lfast::lfast(&em.edges, masks.as_ref().map(|m| &m[l]), &params);
-                let resp = response::responses(&em.denoised, &cands);
-                corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
-                    .into_iter()
-                    .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] })
-                    .collect()
-            })
-            .collect();
+        let level_corners = |l: usize, img: &Plane<u8>, em: &mut fused::EdgeScratch| -> Vec<Corner> {
+            let b = params.border;
+            if img.width <= 2 * b || img.height <= 2 * b {
+                return Vec::new();
+            }
+            fused::edges_fused_into(img, self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct, em);
+            let cands = lfast::lfast(&em.edges, masks.as_ref().map(|m| &m[l]), &params);
+            let resp = response::responses(&em.denoised, &cands);
+            corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
+                .into_iter()
+                .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] })
+                .collect()
+        };
+        // Level 0 needs no resizing: detect on it while levels 1.. are built
+        // (each from the one before) and then detected on.
+        let (head, rest) = ws.levels.split_at_mut(1);
+        let (em0, em_rest) = ws.edges.split_at_mut(1);
+        let base = &head[0];
+        let (first, others) = rayon::join(
+            || level_corners(0, base, &mut em0[0]),
+            || {
+                pyramid::build_levels_from(base, &sizes, rest);
+                rest.par_iter()
+                    .zip(em_rest.par_iter_mut())
+                    .enumerate()
+                    .map(|(i, (img, em))| level_corners(i + 1, img, em))
+                    .collect::<Vec<_>>()
+            },
+        );
+        let per_level: Vec<Vec<Corner>> = std::iter::once(first).chain(others).collect();
         Ok(select::select(per_level, &sizes, self.cfg.n_features, self.cfg.distribution))
     }
 

@@ -142,9 +142,17 @@ pub fn pyramid_into(base: &Plane<u8>, sizes: &[(u32, u32)], levels: &mut Vec<Pla
 pub fn build_levels(sizes: &[(u32, u32)], levels: &mut Vec<Plane<u8>>) {
     levels.resize_with(sizes.len().max(1), Default::default);
     levels.truncate(sizes.len().max(1));
-    for (l, &(w, h)) in sizes.iter().enumerate().skip(1) {
-        let (done, rest) = levels.split_at_mut(l);
-        resize_into(&done[l - 1], w, h, &mut rest[0]);
+    let (head, rest) = levels.split_at_mut(1);
+    build_levels_from(&head[0], sizes, rest);
+}
+
+/// Levels 1.. of a pyramid over `base` into `rest` (`rest[i]` is level i+1),
+/// each resized from the one before (SPEC 10).
+pub fn build_levels_from(base: &Plane<u8>, sizes: &[(u32, u32)], rest: &mut [Plane<u8>]) {
+    for (i, &(w, h)) in sizes.iter().enumerate().skip(1).take(rest.len()) {
+        let (done, todo) = rest.split_at_mut(i - 1);
+        let prev = if i == 1 { base } else { &done[i - 2] };
+        resize_into(prev, w, h, &mut todo[0]);
     }
 }
 
