@@ -9,21 +9,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
-fn lfast(args: &[&dyn AsRef<OsStr>]) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_lfast"));
-    for a in args {
-        c.arg(a);
-    }
-    c.output().expect("the lfast binary runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{lfast, stderr, stdout};
 
 fn show(o: &Output) -> String {
     format!("exit {:?}\nstdout: {}\nstderr: {}", o.status, stdout(o), stderr(o))

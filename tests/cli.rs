@@ -4,23 +4,9 @@ mod common;
 
 use lfast::io::Features;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn lfast(args: &[&dyn AsRef<std::ffi::OsStr>]) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_lfast"));
-    for a in args {
-        c.arg(a);
-    }
-    c.output().expect("the lfast binary runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{lfast, stderr, stdout};
 
 fn assert_ok(o: &Output) {
     assert!(o.status.success(), "exit {:?}\nstdout: {}\nstderr: {}", o.status, stdout(o), stderr(o));

@@ -21,3 +21,22 @@ pub fn shared(rel: &str) -> Option<PathBuf> {
 pub fn data(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
 }
+
+/// Runs the `lfast` binary with `args`.
+pub fn lfast(args: &[&dyn AsRef<std::ffi::OsStr>]) -> std::process::Output {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_lfast"));
+    for a in args {
+        c.arg(a);
+    }
+    c.output().expect("the lfast binary runs")
+}
+
+/// A process's stdout as text.
+pub fn stdout(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// A process's stderr as text.
+pub fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
