@@ -97,7 +97,7 @@ impl OrbDetector {
                     })
                     .collect();
                 // retainBest(2 * quota) by FAST score, ties by position
-                kps.sort_by(|a, c| c.response.total_cmp(&a.response).then((a.pt.y, a.pt.x).partial_cmp(&(c.pt.y, c.pt.x)).unwrap()));
+                kps.sort_by(|a, c| c.response.total_cmp(&a.response).then(a.pt.y.total_cmp(&c.pt.y)).then(a.pt.x.total_cmp(&c.pt.x)));
                 kps.truncate(2 * quotas[l] as usize);
                 let mut cs: Vec<Corner> = kps
                     .iter()

@@ -59,15 +59,19 @@ impl Pattern {
     /// (OpenCV's cvRound): `x' = x cos - y sin`, `y' = x sin + y cos`.
     pub fn rotated(&self, angle: f64) -> Vec<Pair> {
         let (s, c) = angle.sin_cos();
-        let rot = |x: i8, y: i8| {
+        self.map_points(|x, y| {
             let (x, y) = (x as f64, y as f64);
             ((x * c - y * s).round_ties_even() as i8, (x * s + y * c).round_ties_even() as i8)
-        };
+        })
+    }
+
+    /// The pairs with `f` applied to both points of each.
+    fn map_points(&self, f: impl Fn(i8, i8) -> (i8, i8)) -> Vec<Pair> {
         self.pairs
             .iter()
             .map(|p| {
-                let (ax, ay) = rot(p[0], p[1]);
-                let (bx, by) = rot(p[2], p[3]);
+                let (ax, ay) = f(p[0], p[1]);
+                let (bx, by) = f(p[2], p[3]);
                 [ax, ay, bx, by]
             })
             .collect()
@@ -139,19 +143,11 @@ pub fn describe(smoothed: &Plane<u8>, x: u32, y: u32, table: &[Pair]) -> Descrip
 pub fn describe_continuous(smoothed: &Plane<u8>, x: u32, y: u32, angle_deg: f32, pattern: &Pattern) -> Descriptor {
     let a = angle_deg * (std::f32::consts::PI / 180.0);
     let (s, c) = (a.sin(), a.cos());
-    let rot = |px: i8, py: i8| {
+    // f32, as OpenCV computes it per keypoint
+    let table = pattern.map_points(|px, py| {
         let (px, py) = (px as f32, py as f32);
         ((px * c - py * s).round_ties_even() as i8, (px * s + py * c).round_ties_even() as i8)
-    };
-    let table: Vec<Pair> = pattern
-        .pairs
-        .iter()
-        .map(|p| {
-            let (ax, ay) = rot(p[0], p[1]);
-            let (bx, by) = rot(p[2], p[3]);
-            [ax, ay, bx, by]
-        })
-        .collect();
+    });
     describe(smoothed, x, y, &table)
 }
 

@@ -142,7 +142,8 @@ pub fn select(per_level: Vec<Vec<Corner>>, sizes: &[(u32, u32)], n: u32, distrib
         } else if distribution {
             let (w, h) = sizes[l];
             let chosen = distribute_quadtree(&cs, w, h, q);
-            rest.extend(cs.into_iter().filter(|c| !chosen.iter().any(|k| (k.x, k.y) == (c.x, c.y))));
+            let at: std::collections::HashSet<(u32, u32)> = chosen.iter().map(|k| (k.x, k.y)).collect();
+            rest.extend(cs.into_iter().filter(|c| !at.contains(&(c.x, c.y))));
             taken.extend(chosen);
         } else {
             rest.extend(cs.split_off(q));
