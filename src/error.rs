@@ -78,6 +78,42 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
+    /// No GPU adapter matched (none present, or none named as asked).
+    #[error("no GPU adapter: {reason}")]
+    NoAdapter {
+        /// What was looked for and what was found.
+        reason: String,
+    },
+    /// The frame needs more than the device's limits allow.
+    #[error("GPU limits: {reason}")]
+    GpuLimits {
+        /// Which limit, what was needed.
+        reason: String,
+    },
+    /// The GPU ran out of memory.
+    #[error("GPU out of memory: {reason}")]
+    GpuOutOfMemory {
+        /// What was being allocated.
+        reason: String,
+    },
+    /// The device was lost (driver reset, `Device::destroy`, removal).
+    #[error("GPU device lost: {reason}")]
+    DeviceLost {
+        /// The driver's message.
+        reason: String,
+    },
+    /// Any other GPU failure (device request refused, validation, mapping).
+    #[error("GPU error: {reason}")]
+    Gpu {
+        /// The message.
+        reason: String,
+    },
+    /// The requested combination is not available on this backend.
+    #[error("not supported: {reason}")]
+    Unsupported {
+        /// What and why.
+        reason: String,
+    },
 }
 
 /// `Result` with the crate's [`Error`].

@@ -15,8 +15,11 @@ pub mod error;
 pub mod image;
 pub mod io;
 mod keypoint;
+pub mod gpu;
 
 pub use config::{Config, Mode};
 pub use error::{Error, Result};
 pub use image::{GrayView, Plane};
 pub use keypoint::{Descriptor, KeyPoint, hamming};
+/// The wgpu this crate is built against, so embedders use the same version.
+pub use wgpu;

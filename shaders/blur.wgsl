@@ -1,0 +1,1 @@
+// placeholder: blur is not written yet

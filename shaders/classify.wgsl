@@ -1,0 +1,1 @@
+// placeholder: classify is not written yet

@@ -1,0 +1,50 @@
+// Prepended to every stage shader (see src/gpu/kernel.rs). Mirrors
+// `Params` in src/gpu/layout.rs field for field.
+//
+// Every per-pixel buffer is an atlas: level l occupies
+// [levels[l].z, levels[l].z + w*h) in row-major order, one u32 per pixel.
+
+const MAX_LEVELS: u32 = 32u;
+
+struct Params {
+    // w, h, pixel offset of the level in the atlas, index of its first window
+    levels: array<vec4<u32>, 32>,
+    // windows along x and y, offset of the level's grid in `grid`, a | (b << 16)
+    grids: array<vec4<u32>, 32>,
+    // scale s^l (x = y), 31 * s^l, 0, 0
+    scales: array<vec4<f32>, 32>,
+    // per-level quotas of n_features, four per vec4
+    quotas: array<vec4<u32>, 8>,
+    n_levels: u32,
+    delta_num: u32,
+    delta_den: u32,
+    alpha_pct: u32,
+    mode: u32,          // 0 = Paper, 1 = Branch
+    support: u32,
+    straight_tol: u32,
+    border: u32,
+    nms_radius: u32,
+    n_features: u32,    // 0 = no cap
+    use_mask: u32,
+    capacity: u32,      // keypoint slots
+    orientation_bins: u32,
+    total_px: u32,
+    max_w: u32,
+    max_h: u32,
+}
+
+@group(0) @binding(0) var<uniform> P: Params;
+
+fn lw(l: u32) -> u32 { return P.levels[l].x; }
+fn lh(l: u32) -> u32 { return P.levels[l].y; }
+fn loff(l: u32) -> u32 { return P.levels[l].z; }
+
+// Atlas index of (x, y) at level l, coordinates clamped into the level
+// (SPEC's replicate border).
+fn clamped(l: u32, x: i32, y: i32) -> u32 {
+    let cx = u32(clamp(x, 0, i32(lw(l)) - 1));
+    let cy = u32(clamp(y, 0, i32(lh(l)) - 1));
+    return loff(l) + cy * lw(l) + cx;
+}
+
+fn quota(l: u32) -> u32 { return P.quotas[l / 4u][l % 4u]; }

@@ -1,0 +1,1 @@
+// placeholder: corner_nms is not written yet

@@ -1,0 +1,1 @@
+// placeholder: gradient is not written yet

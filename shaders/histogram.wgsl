@@ -1,0 +1,1 @@
+// placeholder: histogram is not written yet

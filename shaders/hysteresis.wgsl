@@ -1,0 +1,1 @@
+// placeholder: hysteresis is not written yet

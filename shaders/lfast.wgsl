@@ -1,0 +1,1 @@
+// placeholder: lfast is not written yet

@@ -1,0 +1,1 @@
+// placeholder: local_threshold is not written yet

@@ -1,0 +1,1 @@
+// placeholder: luma is not written yet

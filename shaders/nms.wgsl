@@ -1,0 +1,1 @@
+// placeholder: nms is not written yet

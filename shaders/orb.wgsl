@@ -1,0 +1,1 @@
+// placeholder: orb is not written yet

@@ -1,0 +1,1 @@
+// placeholder: orientation is not written yet

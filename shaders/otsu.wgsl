@@ -1,0 +1,1 @@
+// placeholder: otsu is not written yet

@@ -1,0 +1,1 @@
+// placeholder: pyramid is not written yet

@@ -1,0 +1,1 @@
+// placeholder: response is not written yet

@@ -1,0 +1,1 @@
+// placeholder: rules is not written yet

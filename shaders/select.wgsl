@@ -1,0 +1,1 @@
+// placeholder: select is not written yet

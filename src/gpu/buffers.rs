@@ -1,0 +1,254 @@
+//! Every GPU buffer of one frame size, by name. Built once per size by
+//! [`Buffers::new`] and reused for every frame of that size.
+
+use super::kernel::DYNAMIC_STRIDE;
+use super::layout::{FrameLayout, MAX_LEVELS};
+use crate::config::Config;
+use crate::cpu::orb::{Pattern, RotatedPatterns};
+use crate::error::{Error, Result};
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+/// One keypoint as the GPU stores it (48 bytes; `shaders/select.wgsl`'s `Kp`).
+/// `x, y, size` are in input-image pixels, ready to draw; `px, py, level`
+/// locate it in the pyramid; `m10, m01` are the exact intensity-centroid
+/// moments from which the host derives `KeyPoint::angle` as the CPU does.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuKeypoint {
+    /// Position in the input image, x.
+    pub x: f32,
+    /// Position in the input image, y.
+    pub y: f32,
+    /// Diameter, `31 s^level`.
+    pub size: f32,
+    /// Angle in degrees from the GPU's atan2 (approximate; the host recomputes it exactly).
+    pub angle: f32,
+    /// Harris response.
+    pub response: f32,
+    /// Pyramid level.
+    pub level: u32,
+    /// Column at that level.
+    pub px: u32,
+    /// Row at that level.
+    pub py: u32,
+    /// First-order moment along x.
+    pub m10: i32,
+    /// First-order moment along y.
+    pub m01: i32,
+    /// Orientation bin.
+    pub bin: u32,
+    /// Padding.
+    pub _pad: u32,
+}
+
+/// u32 words per [`GpuKeypoint`].
+pub const KP_WORDS: u64 = 12;
+/// u32 words per descriptor.
+pub const DESC_WORDS: u64 = 8;
+
+/// Offsets in [`Buffers::indirect`]: dispatch args over the corner list,
+/// over the final keypoints, and `draw` args (4 vertices per keypoint instance).
+pub mod indirect {
+    /// `dispatch_workgroups_indirect` over the unsorted corners (64 per group).
+    pub const CORNERS: u64 = 0;
+    /// `dispatch_workgroups_indirect` over the final keypoints (64 per group).
+    pub const KEYPOINTS: u64 = 16;
+    /// `draw_indirect` args: vertex_count 4, instance_count = keypoints.
+    pub const DRAW: u64 = 32;
+    /// Size of the buffer.
+    pub const SIZE: u64 = 48;
+}
+
+/// Slots of [`Buffers::counters`].
+pub mod counter {
+    /// Corners appended by corner NMS.
+    pub const CORNERS: usize = 0;
+    /// Final keypoints (after the cap).
+    pub const KEYPOINTS: usize = 1;
+    /// Corners taken by their level quota (select).
+    pub const TAKEN: usize = 2;
+    /// Words in the buffer.
+    pub const LEN: usize = 4;
+}
+
+/// The named buffers of one frame size.
+#[derive(Debug)]
+pub struct Buffers {
+    /// What lies where.
+    pub layout: FrameLayout,
+    /// `Params` (binding 0 of every pass).
+    pub params: wgpu::Buffer,
+    /// `MAX_LEVELS` records of 256 bytes, record l = `[l, 0, 0, 0]`, for
+    /// passes that run level by level (the pyramid) through a dynamic offset.
+    pub level_index: wgpu::Buffer,
+    /// 8-bit gray input of level 0, four pixels per word (see shaders/luma.wgsl).
+    pub input: wgpu::Buffer,
+    /// The pyramid (level 0 = the input's luma).
+    pub gray: wgpu::Buffer,
+    /// Level masks (nonzero = on), read when `Params::use_mask` is 1.
+    pub mask: wgpu::Buffer,
+    /// D (SPEC 1).
+    pub denoised: wgpu::Buffer,
+    /// gx2 (i32).
+    pub gx: wgpu::Buffer,
+    /// gy2 (i32).
+    pub gy: wgpu::Buffer,
+    /// S.
+    pub s: wgpu::Buffer,
+    /// M.
+    pub m: wgpu::Buffer,
+    /// NMS survivors (0/1).
+    pub nms: wgpu::Buffer,
+    /// 256 bins per level.
+    pub hist: wgpu::Buffer,
+    /// Per level T1 = k + 1, or 0 when the level has no edges.
+    pub otsu: wgpu::Buffer,
+    /// Window grids: per level xs, ys, col_window, row_window.
+    pub grid: wgpu::Buffer,
+    /// Per window min, max, median, V3.
+    pub windows: wgpu::Buffer,
+    /// SPEC 6 classes.
+    pub classes: wgpu::Buffer,
+    /// Classes after rules 1 and 2.
+    pub ruled: wgpu::Buffer,
+    /// Union-find labels (hysteresis).
+    pub labels: wgpu::Buffer,
+    /// Per root: 1 if its component holds a STRONG pixel (hysteresis).
+    pub flags: wgpu::Buffer,
+    /// E: 255 = edge.
+    pub edges: wgpu::Buffer,
+    /// L-FAST candidates (0/1).
+    pub cand: wgpu::Buffer,
+    /// Harris response of candidates (f32 bits).
+    pub resp: wgpu::Buffer,
+    /// Corners surviving corner NMS, unordered ([`GpuKeypoint`]s).
+    pub corners: wgpu::Buffer,
+    /// Per corner scratch for select (4 words each).
+    pub ranks: wgpu::Buffer,
+    /// The final keypoints in SPEC 9 order.
+    pub keypoints: wgpu::Buffer,
+    /// 32-byte descriptors, `descriptors[i]` for `keypoints[i]`.
+    pub descriptors: wgpu::Buffer,
+    /// See [`counter`].
+    pub counters: wgpu::Buffer,
+    /// See [`indirect`].
+    pub indirect: wgpu::Buffer,
+    /// 7x7-blurred levels (SPEC 11).
+    pub smooth: wgpu::Buffer,
+    /// Horizontal blur pass output.
+    pub blur_tmp: wgpu::Buffer,
+    /// Rotated patterns: per bin 256 pairs of four i32 (x1, y1, x2, y2).
+    pub patterns: wgpu::Buffer,
+}
+
+impl Buffers {
+    /// Allocates everything for `width x height` under `cfg` (valid). Fails,
+    /// naming the limit, when a buffer would exceed the device's limits.
+    pub fn new(device: &wgpu::Device, cfg: &Config, width: u32, height: u32) -> Result<Self> {
+        let layout = FrameLayout::new(cfg, width, height);
+        let limits = device.limits();
+        let px_bytes = layout.total_px as u64 * 4;
+        let kp_bytes = layout.capacity as u64 * KP_WORDS * 4;
+        let largest = px_bytes.max(kp_bytes);
+        let max_binding = limits.max_storage_buffer_binding_size as u64;
+        if largest > max_binding || largest > limits.max_buffer_size {
+            return Err(Error::GpuLimits {
+                reason: format!(
+                    "a {width}x{height} frame needs storage buffers of {largest} bytes, the device allows {}",
+                    max_binding.min(limits.max_buffer_size)
+                ),
+            });
+        }
+        let [gx, gy, gz] = layout.pixel_groups();
+        let lim = limits.max_compute_workgroups_per_dimension;
+        if gx > lim || gy > lim || gz > lim {
+            return Err(Error::GpuLimits {
+                reason: format!("a {width}x{height} frame needs {gx}x{gy}x{gz} workgroups, the device allows {lim} per dimension"),
+            });
+        }
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let buf = |label: &str, bytes: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(16).next_multiple_of(16),
+                usage: storage,
+                mapped_at_creation: false,
+            })
+        };
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+        };
+        let px = |label: &str| buf(label, px_bytes);
+        let n_levels = layout.n_levels() as u64;
+        let mut level_index = vec![0u8; MAX_LEVELS * DYNAMIC_STRIDE as usize];
+        for l in 0..MAX_LEVELS {
+            level_index[l * DYNAMIC_STRIDE as usize..][..4].copy_from_slice(&(l as u32).to_le_bytes());
+        }
+        let mut grid = layout.grid_data.clone();
+        grid.resize(grid.len().max(4), 0);
+        let cap = layout.capacity as u64;
+        let patterns = pattern_words(cfg);
+        let mut indirect_init = [0u32; (indirect::SIZE / 4) as usize];
+        indirect_init[1] = 1;
+        indirect_init[2] = 1;
+        indirect_init[5] = 1;
+        indirect_init[6] = 1;
+        indirect_init[8] = 4;
+        let this = Self {
+            params: init("params", bytemuck::bytes_of(&layout.params), wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST),
+            level_index: init("level_index", &level_index, wgpu::BufferUsages::UNIFORM),
+            input: buf("input", (width as u64 * height as u64).next_multiple_of(4)),
+            gray: px("gray"),
+            mask: px("mask"),
+            denoised: px("denoised"),
+            gx: px("gx"),
+            gy: px("gy"),
+            s: px("s"),
+            m: px("m"),
+            nms: px("nms"),
+            hist: buf("hist", 256 * 4 * n_levels),
+            otsu: buf("otsu", 4 * n_levels),
+            grid: init("grid", bytemuck::cast_slice(&grid), storage),
+            windows: buf("windows", 16 * layout.total_windows as u64),
+            classes: px("classes"),
+            ruled: px("ruled"),
+            labels: px("labels"),
+            flags: px("flags"),
+            edges: px("edges"),
+            cand: px("cand"),
+            resp: px("resp"),
+            corners: buf("corners", cap * KP_WORDS * 4),
+            ranks: buf("ranks", cap * 16),
+            keypoints: buf("keypoints", cap * KP_WORDS * 4),
+            descriptors: buf("descriptors", cap * DESC_WORDS * 4),
+            counters: buf("counters", counter::LEN as u64 * 4),
+            indirect: init(
+                "indirect",
+                bytemuck::cast_slice(&indirect_init),
+                storage | wgpu::BufferUsages::INDIRECT,
+            ),
+            smooth: px("smooth"),
+            blur_tmp: px("blur_tmp"),
+            patterns: init("patterns", bytemuck::cast_slice(&patterns), storage),
+            layout,
+        };
+        Ok(this)
+    }
+
+    /// Width and height of level 0.
+    pub fn size(&self) -> (u32, u32) {
+        self.layout.sizes[0]
+    }
+}
+
+/// The rotated pattern tables as i32 words: bin-major, 256 pairs of 4.
+/// With `orientation_bins = 0` the one unrotated table (the shader rotates).
+fn pattern_words(cfg: &Config) -> Vec<i32> {
+    let tables: Vec<Vec<[i8; 4]>> = if cfg.orientation_bins > 0 {
+        RotatedPatterns::new(Pattern::orb(), cfg.orientation_bins).tables
+    } else {
+        vec![Pattern::orb().pairs.clone()]
+    };
+    tables.iter().flatten().flat_map(|p| p.map(|c| c as i32)).collect()
+}

@@ -1,0 +1,205 @@
+//! Compute pipelines with their bind group layouts, built once, and bind
+//! groups whose buffers are given by name and checked against the shader's.
+
+use crate::error::{Error, Result};
+
+/// The WGSL prelude every stage shader is compiled with: the `Params`
+/// uniform at binding 0 and the atlas helpers.
+pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
+
+/// The kind of a binding slot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Slot {
+    /// `var<uniform>`, whole buffer.
+    Uniform,
+    /// `var<uniform>` bound with a dynamic offset (one 256-byte record per use).
+    UniformDynamic,
+    /// `var<storage, read>`.
+    Read,
+    /// `var<storage, read_write>`.
+    ReadWrite,
+    /// `texture_2d<f32>` read with `textureLoad` (no sampler).
+    Texture,
+}
+
+/// One binding of a shader: its number, the name of the WGSL variable, its kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    /// `@binding(n)` in group 0.
+    pub binding: u32,
+    /// The WGSL global's name; bind groups pass buffers under this name.
+    pub name: &'static str,
+    /// How it is accessed.
+    pub slot: Slot,
+}
+
+/// Shorthand for the table of a pass's bindings.
+pub const fn b(binding: u32, name: &'static str, slot: Slot) -> Binding {
+    Binding { binding, name, slot }
+}
+
+/// The `Params` uniform every stage has at binding 0.
+pub const PARAMS: Binding = b(0, "P", Slot::Uniform);
+
+/// Size of one record of a dynamic-offset uniform (the minimum alignment wgpu guarantees).
+pub const DYNAMIC_STRIDE: u64 = 256;
+
+/// A shader's full source: the common prelude followed by the stage.
+pub fn full_source(stage_source: &str) -> String {
+    format!("{COMMON}\n{stage_source}")
+}
+
+/// A compute pipeline and the layout of its single bind group.
+#[derive(Debug)]
+pub struct Kernel {
+    /// The pipeline.
+    pub pipeline: wgpu::ComputePipeline,
+    /// Its bind group layout (group 0).
+    pub layout: wgpu::BindGroupLayout,
+    bindings: &'static [Binding],
+    label: String,
+}
+
+impl Kernel {
+    /// Compiles entry point `entry` of `stage_source` (without the prelude).
+    pub fn new(device: &wgpu::Device, label: &str, stage_source: &str, entry: &str, bindings: &'static [Binding]) -> Self {
+        let source = full_source(stage_source);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        Self::from_module(device, label, &module, entry, bindings)
+    }
+
+    /// A kernel from an already compiled module (several entry points of one shader).
+    pub fn from_module(
+        device: &wgpu::Device,
+        label: &str,
+        module: &wgpu::ShaderModule,
+        entry: &str,
+        bindings: &'static [Binding],
+    ) -> Self {
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = bindings
+            .iter()
+            .map(|bd| wgpu::BindGroupLayoutEntry {
+                binding: bd.binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: match bd.slot {
+                    Slot::Uniform => wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    Slot::UniformDynamic => wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(16),
+                    },
+                    Slot::Texture => wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    Slot::Read | Slot::ReadWrite => wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: bd.slot == Slot::Read },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                },
+                count: None,
+            })
+            .collect();
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries });
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(label),
+            layout: Some(&pl),
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Self { pipeline, layout, bindings, label: label.to_string() }
+    }
+
+    /// The bindings this kernel was built with.
+    pub fn bindings(&self) -> &'static [Binding] {
+        self.bindings
+    }
+
+    /// A bind group from buffers named as the shader's variables, in any order.
+    /// A missing or unknown name is an error naming it (a bug in the pass, not in user input).
+    pub fn bind(&self, device: &wgpu::Device, buffers: &[(&str, &wgpu::Buffer)]) -> Result<wgpu::BindGroup> {
+        self.bind_with(device, buffers, &[])
+    }
+
+    /// [`bind`](Self::bind) with textures too, also by name.
+    pub fn bind_with(
+        &self,
+        device: &wgpu::Device,
+        buffers: &[(&str, &wgpu::Buffer)],
+        textures: &[(&str, &wgpu::TextureView)],
+    ) -> Result<wgpu::BindGroup> {
+        let mut entries = Vec::with_capacity(self.bindings.len());
+        for bd in self.bindings {
+            if bd.slot == Slot::Texture {
+                let view = textures.iter().find(|(n, _)| *n == bd.name).map(|(_, t)| *t).ok_or_else(|| Error::Gpu {
+                    reason: format!("pass {}: no texture given for binding `{}`", self.label, bd.name),
+                })?;
+                entries.push(wgpu::BindGroupEntry { binding: bd.binding, resource: wgpu::BindingResource::TextureView(view) });
+                continue;
+            }
+            let buf = buffers.iter().find(|(n, _)| *n == bd.name).map(|(_, b)| *b).ok_or_else(|| Error::Gpu {
+                reason: format!("pass {}: no buffer given for binding `{}`", self.label, bd.name),
+            })?;
+            let resource = if bd.slot == Slot::UniformDynamic {
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: buf, offset: 0, size: wgpu::BufferSize::new(16) })
+            } else {
+                buf.as_entire_binding()
+            };
+            entries.push(wgpu::BindGroupEntry { binding: bd.binding, resource });
+        }
+        let names = buffers.iter().map(|(n, _)| *n).chain(textures.iter().map(|(n, _)| *n));
+        if let Some(n) = names.clone().find(|n| !self.bindings.iter().any(|bd| bd.name == *n)) {
+            return Err(Error::Gpu { reason: format!("pass {}: shader has no binding `{n}`", self.label) });
+        }
+        Ok(device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&self.label), layout: &self.layout, entries: &entries }))
+    }
+
+    /// Sets the pipeline and bind group and dispatches `groups` workgroups.
+    pub fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>, bg: &wgpu::BindGroup, groups: [u32; 3]) {
+        if groups.contains(&0) {
+            return;
+        }
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bg, &[]);
+        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+    }
+
+    /// As [`dispatch`](Self::dispatch) with the bind group's dynamic offset.
+    pub fn dispatch_at(&self, pass: &mut wgpu::ComputePass<'_>, bg: &wgpu::BindGroup, offset: u32, groups: [u32; 3]) {
+        if groups.contains(&0) {
+            return;
+        }
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bg, &[offset]);
+        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+    }
+
+    /// Dispatches with the workgroup counts read from `indirect` at `offset`
+    /// (sized on the GPU by an earlier pass, e.g. by the keypoint count).
+    pub fn dispatch_indirect(&self, pass: &mut wgpu::ComputePass<'_>, bg: &wgpu::BindGroup, indirect: &wgpu::Buffer, offset: u64) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bg, &[]);
+        pass.dispatch_workgroups_indirect(indirect, offset);
+    }
+}
+
+/// Workgroups of `size` threads needed to cover `n` items.
+pub fn groups(n: u32, size: u32) -> u32 {
+    n.div_ceil(size)
+}

@@ -1,0 +1,212 @@
+//! Where everything of one frame size lives: level sizes and atlas offsets,
+//! the SPEC 5 window grids, the keypoint capacity, and the `Params` uniform
+//! that carries it all to the shaders (mirrors shaders/common.wgsl).
+
+use crate::config::{Config, DELTA_DEN, Mode};
+use crate::cpu::local_threshold::{nearest_windows, window_origins};
+use crate::cpu::select::level_quotas;
+use bytemuck::{Pod, Zeroable};
+
+/// Most pyramid levels the shaders handle (as `Config::validate` allows).
+pub const MAX_LEVELS: usize = 32;
+/// Side of the 2D workgroups of per-pixel passes.
+pub const TILE: u32 = 16;
+
+/// The uniform every pass binds at 0. Field for field as in shaders/common.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct Params {
+    /// Per level: width, height, atlas offset, index of its first window.
+    pub levels: [[u32; 4]; MAX_LEVELS],
+    /// Per level: windows along x, along y, grid offset, `a | b << 16`.
+    pub grids: [[u32; 4]; MAX_LEVELS],
+    /// Per level: `s^l`, `31 s^l`, 0, 0.
+    pub scales: [[f32; 4]; MAX_LEVELS],
+    /// Per-level quotas of `n_features`, four per row.
+    pub quotas: [[u32; 4]; MAX_LEVELS / 4],
+    /// Number of levels.
+    pub n_levels: u32,
+    /// SPEC 1 delta numerator.
+    pub delta_num: u32,
+    /// SPEC 1 delta denominator.
+    pub delta_den: u32,
+    /// SPEC 5 alpha in hundredths.
+    pub alpha_pct: u32,
+    /// 0 = Paper, 1 = Branch.
+    pub mode: u32,
+    /// SPEC 8 support.
+    pub support: u32,
+    /// SPEC 8 straight_tol.
+    pub straight_tol: u32,
+    /// SPEC 8 border.
+    pub border: u32,
+    /// SPEC 9 corner NMS radius.
+    pub nms_radius: u32,
+    /// SPEC 9 cap, 0 = none.
+    pub n_features: u32,
+    /// 1 when the mask atlas is to be read.
+    pub use_mask: u32,
+    /// Keypoint slots.
+    pub capacity: u32,
+    /// Orientation bins, 0 = continuous.
+    pub orientation_bins: u32,
+    /// Pixels in the atlas.
+    pub total_px: u32,
+    /// Width of level 0.
+    pub max_w: u32,
+    /// Height of level 0.
+    pub max_h: u32,
+}
+
+/// One level's window grid (SPEC 5), as the CPU reference lays it out.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LevelGrid {
+    /// Window width.
+    pub a: u32,
+    /// Window height.
+    pub b: u32,
+    /// Window origins along x.
+    pub xs: Vec<u32>,
+    /// Window origins along y.
+    pub ys: Vec<u32>,
+    /// Nearest window per column.
+    pub col_window: Vec<u32>,
+    /// Nearest window per row.
+    pub row_window: Vec<u32>,
+}
+
+/// The layout of one frame size under one config.
+#[derive(Clone, Debug)]
+pub struct FrameLayout {
+    /// Level sizes (level 0 = the input).
+    pub sizes: Vec<(u32, u32)>,
+    /// Atlas offset of each level, in pixels.
+    pub offsets: Vec<u32>,
+    /// Pixels of all levels.
+    pub total_px: u32,
+    /// Per level window grid.
+    pub grids: Vec<LevelGrid>,
+    /// Index of each level's first window in the window-statistics buffer.
+    pub window_offsets: Vec<u32>,
+    /// Windows of all levels.
+    pub total_windows: u32,
+    /// The grid buffer: per level `xs, ys, col_window, row_window`.
+    pub grid_data: Vec<u32>,
+    /// Keypoint slots: an upper bound on corners surviving corner NMS, so
+    /// the list can never overflow (survivors are >= r+1 apart, see docs/algorithm.md).
+    pub capacity: u32,
+    /// The uniform.
+    pub params: Params,
+}
+
+impl FrameLayout {
+    /// The layout of a `width x height` frame; `cfg` must be valid.
+    pub fn new(cfg: &Config, width: u32, height: u32) -> Self {
+        let sizes = cfg.level_sizes(width, height);
+        let mut offsets = Vec::with_capacity(sizes.len());
+        let mut total: u64 = 0;
+        for &(w, h) in &sizes {
+            offsets.push(total as u32);
+            total += w as u64 * h as u64;
+        }
+        let mut grids = Vec::new();
+        let mut window_offsets = Vec::new();
+        let mut grid_data = Vec::new();
+        let mut p = Params::zeroed();
+        let mut total_windows = 0u32;
+        let (b, r) = (cfg.border, cfg.nms_radius);
+        let mut capacity: u64 = 0;
+        for (l, &(w, h)) in sizes.iter().enumerate() {
+            let (a, bb) = ((w / 5).max(1), (h / 5).max(1));
+            let xs = window_origins(w, a);
+            let ys = window_origins(h, bb);
+            let g = LevelGrid {
+                a,
+                b: bb,
+                col_window: nearest_windows(&xs, a, w),
+                row_window: nearest_windows(&ys, bb, h),
+                xs,
+                ys,
+            };
+            p.levels[l] = [w, h, offsets[l], total_windows];
+            p.grids[l] = [g.xs.len() as u32, g.ys.len() as u32, grid_data.len() as u32, a | (bb << 16)];
+            let s = cfg.level_scale(l as u32);
+            p.scales[l] = [s as f32, (31.0 * s) as f32, 0.0, 0.0];
+            window_offsets.push(total_windows);
+            total_windows += (g.xs.len() * g.ys.len()) as u32;
+            grid_data.extend_from_slice(&g.xs);
+            grid_data.extend_from_slice(&g.ys);
+            grid_data.extend_from_slice(&g.col_window);
+            grid_data.extend_from_slice(&g.row_window);
+            grids.push(g);
+            if w > 2 * b && h > 2 * b {
+                capacity += ((w - 2 * b) as u64).div_ceil(r as u64 + 1) * ((h - 2 * b) as u64).div_ceil(r as u64 + 1);
+            }
+        }
+        let capacity = capacity.clamp(1, u32::MAX as u64 / 64) as u32;
+        for (l, q) in level_quotas(cfg.n_features, &sizes).into_iter().enumerate() {
+            p.quotas[l / 4][l % 4] = q;
+        }
+        p.n_levels = sizes.len() as u32;
+        p.delta_num = cfg.delta_num();
+        p.delta_den = DELTA_DEN;
+        p.alpha_pct = cfg.alpha_pct;
+        p.mode = match cfg.mode {
+            Mode::Paper => 0,
+            Mode::Branch => 1,
+        };
+        p.support = cfg.support;
+        p.straight_tol = cfg.straight_tol;
+        p.border = cfg.border;
+        p.nms_radius = cfg.nms_radius;
+        p.n_features = cfg.n_features;
+        p.capacity = capacity;
+        p.orientation_bins = cfg.orientation_bins;
+        p.total_px = total as u32;
+        p.max_w = width;
+        p.max_h = height;
+        Self {
+            sizes,
+            offsets,
+            total_px: total as u32,
+            grids,
+            window_offsets,
+            total_windows,
+            grid_data,
+            capacity,
+            params: p,
+        }
+    }
+
+    /// Number of levels.
+    pub fn n_levels(&self) -> u32 {
+        self.sizes.len() as u32
+    }
+
+    /// Workgroups of a per-pixel pass over all levels at once: tiles of level 0
+    /// in x and y, one layer per level (smaller levels return early).
+    pub fn pixel_groups(&self) -> [u32; 3] {
+        let (w, h) = self.sizes[0];
+        [w.div_ceil(TILE), h.div_ceil(TILE), self.n_levels()]
+    }
+
+    /// Workgroups of a per-pixel pass over level `l` alone.
+    pub fn level_groups(&self, l: usize) -> [u32; 3] {
+        let (w, h) = self.sizes[l];
+        [w.div_ceil(TILE), h.div_ceil(TILE), 1]
+    }
+
+    /// Range of level `l` in a per-pixel atlas.
+    pub fn level_range(&self, l: usize) -> std::ops::Range<usize> {
+        let (w, h) = self.sizes[l];
+        let o = self.offsets[l] as usize;
+        o..o + (w * h) as usize
+    }
+
+    /// Most windows of any level along x and y.
+    pub fn max_windows(&self) -> (u32, u32) {
+        let nx = self.grids.iter().map(|g| g.xs.len() as u32).max().unwrap_or(0);
+        let ny = self.grids.iter().map(|g| g.ys.len() as u32).max().unwrap_or(0);
+        (nx, ny)
+    }
+}

@@ -1,0 +1,8 @@
+//! SPEC stage `orientation` on the GPU (not written yet).
+
+use super::kernel::{Binding, PARAMS};
+
+/// The shader source (without the common prelude).
+pub const SOURCE: &str = include_str!("../../shaders/orientation.wgsl");
+/// Its bindings.
+pub const BINDINGS: &[Binding] = &[PARAMS];
