@@ -129,6 +129,11 @@ impl AngleBins {
         Self { bounds }
     }
 
+    /// The sector boundaries in Q8, `(cos, sin) * 256` rounded (the GPU's table).
+    pub fn bounds(&self) -> &[(i32, i32)] {
+        &self.bounds
+    }
+
     /// Number of bins.
     pub fn len(&self) -> usize {
         self.bounds.len()

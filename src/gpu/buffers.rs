@@ -5,6 +5,7 @@ use super::kernel::DYNAMIC_STRIDE;
 use super::layout::{FrameLayout, MAX_LEVELS};
 use crate::config::Config;
 use crate::cpu::orb::{Pattern, RotatedPatterns};
+use crate::cpu::orientation::AngleBins;
 use crate::error::{Error, Result};
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
@@ -140,6 +141,9 @@ pub struct Buffers {
     pub blur_tmp: wgpu::Buffer,
     /// Rotated patterns: per bin 256 pairs of four i32 (x1, y1, x2, y2).
     pub patterns: wgpu::Buffer,
+    /// Orientation sector boundaries: per bin `(cos, sin)` in Q8 as two i32
+    /// (`AngleBins::bounds`), `max(1, orientation_bins)` pairs.
+    pub angle_bounds: wgpu::Buffer,
 }
 
 impl Buffers {
@@ -189,6 +193,8 @@ impl Buffers {
         grid.resize(grid.len().max(4), 0);
         let cap = layout.capacity as u64;
         let patterns = pattern_words(cfg);
+        let angle_bounds: Vec<i32> =
+            AngleBins::new(cfg.orientation_bins.max(1)).bounds().iter().flat_map(|&(x, y)| [x, y]).collect();
         let mut indirect_init = [0u32; (indirect::SIZE / 4) as usize];
         indirect_init[1] = 1;
         indirect_init[2] = 1;
@@ -231,6 +237,7 @@ impl Buffers {
             smooth: px("smooth"),
             blur_tmp: px("blur_tmp"),
             patterns: init("patterns", bytemuck::cast_slice(&patterns), storage),
+            angle_bounds: init("angle_bounds", bytemuck::cast_slice(&angle_bounds), storage),
             layout,
         };
         Ok(this)
