@@ -1,1 +1,57 @@
-// placeholder: classify is not written yet
+// SPEC 6: the double adaptive dual threshold (paper Algorithm 2), as exact
+// rational comparisons. Mirrors src/cpu/classify.rs.
+// m, nms, otsu, windows, grid -> classes (NONE 0, WEAK_WEAK 1, WEAK 2,
+// WEAK_STRONG 3, STRONG 4). One invocation per pixel, all levels in one
+// dispatch (z = level).
+
+@group(0) @binding(1) var<storage, read> m: array<u32>;
+@group(0) @binding(2) var<storage, read> nms: array<u32>;
+@group(0) @binding(3) var<storage, read> otsu: array<u32>;
+@group(0) @binding(4) var<storage, read> windows: array<u32>;
+@group(0) @binding(5) var<storage, read> grid: array<u32>;
+@group(0) @binding(6) var<storage, read_write> classes: array<u32>;
+
+const NONE: u32 = 0u;
+const WEAK_WEAK: u32 = 1u;
+const WEAK: u32 = 2u;
+const WEAK_STRONG: u32 = 3u;
+const STRONG: u32 = 4u;
+
+// `class_of` in src/cpu/classify.rs: t1 = T1 = k + 1, v3 the window's V3,
+// alpha_pct alpha in hundredths (< 100). M <= 360 and V3 <= 765 keep every
+// product far below 2^32.
+fn class_of(mv: u32, t1: u32, v3: u32, alpha_pct: u32) -> u32 {
+    let above_t1 = mv >= t1;
+    let above_t2 = 2u * mv >= t1;
+    let above_tl1 = mv >= 255u || 300u * mv >= (100u + alpha_pct) * v3;
+    let above_tl2 = 300u * mv >= (100u - alpha_pct) * v3;
+    if (above_t1 && above_tl1) {
+        return STRONG;
+    } else if (above_t1 || above_tl1) {
+        return WEAK_STRONG;
+    } else if (above_t2 && above_tl2) {
+        return WEAK;
+    } else if (above_t2 || above_tl2) {
+        return WEAK_WEAK;
+    }
+    return NONE;
+}
+
+@compute @workgroup_size(16, 16, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let l = id.z;
+    if (id.x >= lw(l) || id.y >= lh(l)) { return; }
+    let p = loff(l) + id.y * lw(l) + id.x;
+    // otsu[l] == 0: the level has no edges (t1 = None on the CPU).
+    let t1 = otsu[l];
+    var c = NONE;
+    if (t1 != 0u && nms[p] != 0u) {
+        // WindowGrid::v3_at: the grid holds xs (nx), ys (ny), col_window (w), row_window (h).
+        let g = P.grids[l];
+        let i = grid[g.z + g.x + g.y + id.x];
+        let j = grid[g.z + g.x + g.y + lw(l) + id.y];
+        let v3 = windows[(P.levels[l].w + j * g.x + i) * 4u + 3u];
+        c = class_of(m[p], t1, v3, P.alpha_pct);
+    }
+    classes[p] = c;
+}

@@ -1,1 +1,78 @@
-// placeholder: corner_nms is not written yet
+// SPEC 9: non-maximum suppression among corner candidates. Mirrors
+// src/cpu/corner_nms.rs. `cand` + `resp` -> survivors appended to `corners`
+// (GpuKeypoint, src/gpu/buffers.rs) with counters[CORNERS] as the cursor.
+// One invocation per pixel, all levels in one dispatch (z = level). The
+// append order is nondeterministic; select.wgsl puts the list in SPEC 9 order.
+
+// src/gpu/buffers.rs's GpuKeypoint, 12 words.
+struct Kp {
+    x: f32,
+    y: f32,
+    size: f32,
+    angle: f32,
+    response: f32,
+    level: u32,
+    px: u32,
+    py: u32,
+    m10: i32,
+    m01: i32,
+    bin: u32,
+    pad: u32,
+}
+
+@group(0) @binding(1) var<storage, read> cand: array<u32>;
+@group(0) @binding(2) var<storage, read> resp: array<u32>;
+@group(0) @binding(3) var<storage, read_write> corners: array<Kp>;
+@group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
+
+// counter::CORNERS in src/gpu/buffers.rs.
+const C_CORNERS: u32 = 0u;
+
+// True iff candidate q beats candidate p: a greater response, or an equal one
+// and an earlier (y, x) position, so exactly one of a tied group survives.
+fn beats(rq: f32, q: vec2<u32>, rp: f32, p: vec2<u32>) -> bool {
+    return rq > rp || (rq == rp && (q.y < p.y || (q.y == p.y && q.x < p.x)));
+}
+
+@compute @workgroup_size(16, 16, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let l = id.z;
+    let w = lw(l);
+    let h = lh(l);
+    if (id.x >= w || id.y >= h) { return; }
+    let i = loff(l) + id.y * w + id.x;
+    if (cand[i] == 0u) { return; }
+    let p = id.xy;
+    let rp = bitcast<f32>(resp[i]);
+    // The (2r+1)^2 square, cut to the level (outside it there are no candidates).
+    let r = P.nms_radius;
+    let x0 = select(0u, p.x - r, p.x >= r);
+    let y0 = select(0u, p.y - r, p.y >= r);
+    let x1 = min(p.x + r, w - 1u);
+    let y1 = min(p.y + r, h - 1u);
+    for (var y = y0; y <= y1; y++) {
+        for (var x = x0; x <= x1; x++) {
+            let j = loff(l) + y * w + x;
+            if (j != i && cand[j] != 0u && beats(bitcast<f32>(resp[j]), vec2(x, y), rp, p)) { return; }
+        }
+    }
+    // A survivor. P.capacity bounds the survivors (docs/algorithm.md), the
+    // guard only keeps a broken bound from writing out of the list.
+    let slot = atomicAdd(&counters[C_CORNERS], 1u);
+    if (slot >= P.capacity) { return; }
+    let s = P.scales[l];
+    var k: Kp;
+    k.x = (f32(p.x) + 0.5) * s.x;
+    k.y = (f32(p.y) + 0.5) * s.x;
+    k.size = s.y;
+    k.angle = 0.0;
+    k.response = rp;
+    k.level = l;
+    k.px = p.x;
+    k.py = p.y;
+    k.m10 = 0;
+    k.m01 = 0;
+    k.bin = 0u;
+    k.pad = 0u;
+    corners[slot] = k;
+}

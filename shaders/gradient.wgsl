@@ -1,1 +1,52 @@
-// placeholder: gradient is not written yet
+// SPEC 2: LSD 2x2 gradient (paper Eq. 2) in integers. Mirrors src/cpu/gradient.rs.
+// denoised -> gx (gx2 as i32), gy (gy2 as i32), s (S = gx2^2 + gy2^2), m (M = isqrt(S) >> 1).
+// One invocation per pixel, all levels in one dispatch (z = level).
+
+@group(0) @binding(1) var<storage, read> denoised: array<u32>;
+@group(0) @binding(2) var<storage, read_write> gx: array<i32>;
+@group(0) @binding(3) var<storage, read_write> gy: array<i32>;
+@group(0) @binding(4) var<storage, read_write> s: array<u32>;
+@group(0) @binding(5) var<storage, read_write> m: array<u32>;
+
+// floor(sqrt(v)), bit by bit (no float: exact for every u32). S <= 2 * 510^2 < 2^20,
+// but the loop is exact over the whole u32 range.
+fn isqrt(v: u32) -> u32 {
+    var rem = v;
+    var root = 0u;
+    var bit = 1u << 30u;
+    while (bit > rem) && (bit != 0u) { bit >>= 2u; }
+    while bit != 0u {
+        if rem >= root + bit {
+            rem -= root + bit;
+            root = (root >> 1u) + bit;
+        } else {
+            root >>= 1u;
+        }
+        bit >>= 2u;
+    }
+    return root;
+}
+
+// `magnitude` in src/cpu/gradient.rs.
+fn magnitude(sq: u32) -> u32 { return isqrt(sq) >> 1u; }
+
+@compute @workgroup_size(16, 16, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let l = id.z;
+    if (id.x >= lw(l) || id.y >= lh(l)) { return; }
+    let x = i32(id.x);
+    let y = i32(id.y);
+    // Right and bottom reads clamp (`clamped` never moves x, y themselves).
+    let a = i32(denoised[clamped(l, x, y)]);          // (x, y)
+    let b = i32(denoised[clamped(l, x + 1, y)]);      // (x+1, y)
+    let c = i32(denoised[clamped(l, x, y + 1)]);      // (x, y+1)
+    let e = i32(denoised[clamped(l, x + 1, y + 1)]);  // (x+1, y+1)
+    let dx = b + e - a - c;
+    let dy = c + e - a - b;
+    let sq = u32(dx * dx + dy * dy);
+    let i = loff(l) + id.y * lw(l) + id.x;
+    gx[i] = dx;
+    gy[i] = dy;
+    s[i] = sq;
+    m[i] = magnitude(sq);
+}

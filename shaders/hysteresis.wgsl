@@ -1,1 +1,149 @@
-// placeholder: hysteresis is not written yet
+// SPEC 7 rule 3: hysteresis. Mirrors src/cpu/hysteresis.rs: a pixel is an
+// edge (255) iff it is STRONG, or WEAK and joined to a STRONG pixel through
+// 8-connected WEAK pixels.
+//
+// The CPU floods from the STRONG pixels. Here the same set comes from
+// connected-component labelling of the active (WEAK or STRONG) pixels with a
+// lock-free union-find (Playne & Hawick, "A New Algorithm for Parallel
+// Connected-Component Labelling on GPUs", 2018): a component is an edge iff it
+// holds a STRONG pixel. Five dispatches, each one invocation per pixel of
+// every level (z = level), in this order:
+//   init         labels[i] = i
+//   merge        union of each active pixel with its active left, up-left,
+//                up and up-right neighbours (the other four see it as theirs)
+//   compress     labels[i] = root of i
+//   flag         flags[root] = 1 for every STRONG pixel (`flags` is cleared
+//                by the pass's prepare)
+//   final_edges  edges = 255 iff active and flags[labels[i]] == 1
+// No host loop and no iteration cap: the result is exact after one pass of
+// each, whatever the length or shape of a contour.
+//
+// Why it converges and is exact:
+// - Labels only decrease and always point to a smaller or equal index:
+//   init sets labels[i] = i, and the only other writes are
+//   atomicMin(labels[hi], lo) with lo < hi and (compress) labels[i] = root,
+//   root <= i. So every parent chain strictly decreases until a root
+//   (labels[r] == r): `find` ends after at most i steps, there are no cycles.
+// - `unite(a, b)` (union) loops on a pair (a, b): it takes the two roots, and
+//   atomicMin links the larger root hi to the smaller lo. If atomicMin returns
+//   hi, hi was still a root: the link is made and the loop ends. Otherwise
+//   another invocation had linked hi to old < hi meanwhile; labels[hi] is now
+//   min(old, lo), so hi is joined to lo or stays joined to old, and the loop
+//   goes on with the pair (old, lo) to join the other one too. Each round
+//   the larger element of the pair strictly decreases (roots <= inputs,
+//   old < hi, lo < hi), so the loop ends after finitely many rounds, without
+//   waiting on any other invocation (lock-free).
+// - No link ever separates pixels (a re-linked hi keeps its old parent joined
+//   through the pending pair), and every link joins two pixels of one
+//   component, so when the merge dispatch ends the trees are exactly the
+//   8-connected components of active pixels. Stale relaxed loads in `find` are
+//   harmless: a stale parent is an older ancestor, still in the same tree, and
+//   the atomicMin result decides.
+// - Levels never connect: neighbours are taken only inside the level's bounds,
+//   and each level owns its own range of atlas indices.
+
+@group(0) @binding(1) var<storage, read> ruled: array<u32>;
+@group(0) @binding(2) var<storage, read_write> labels: array<atomic<u32>>;
+@group(0) @binding(3) var<storage, read_write> flags: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> edges: array<u32>;
+
+// Classes of src/cpu/classify.rs (after rules only NONE, WEAK and STRONG remain).
+const WEAK: u32 = 2u;
+const STRONG: u32 = 4u;
+const EDGE: u32 = 255u;
+
+// A pixel the CPU flood can reach or start from: a seed (STRONG) or WEAK.
+fn is_active(i: u32) -> bool {
+    let c = ruled[i];
+    return c == WEAK || c == STRONG;
+}
+
+// The root of i's tree.
+fn find(i: u32) -> u32 {
+    var r = i;
+    loop {
+        let n = atomicLoad(&labels[r]);
+        if (n == r) { return r; }
+        r = n;
+    }
+    return r; // never reached; naga wants a return after the loop
+}
+
+// Joins the trees of a and b (see the convergence argument above).
+fn unite(a0: u32, b0: u32) {
+    var a = a0;
+    var b = b0;
+    loop {
+        a = find(a);
+        b = find(b);
+        if (a == b) { return; }
+        let hi = max(a, b);
+        let lo = min(a, b);
+        let old = atomicMin(&labels[hi], lo);
+        if (old == hi) { return; }
+        // hi was linked to old < hi meanwhile: join old with lo as well.
+        a = old;
+        b = lo;
+    }
+}
+
+// Is invocation id a pixel of its level (z = level)?
+fn inside(id: vec3<u32>) -> bool {
+    return id.x < lw(id.z) && id.y < lh(id.z);
+}
+
+// The atlas index of pixel id.
+fn at(id: vec3<u32>) -> u32 {
+    return loff(id.z) + id.y * lw(id.z) + id.x;
+}
+
+@compute @workgroup_size(16, 16, 1)
+fn init(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (!inside(id)) { return; }
+    let i = at(id);
+    atomicStore(&labels[i], i);
+}
+
+@compute @workgroup_size(16, 16, 1)
+fn merge(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (!inside(id)) { return; }
+    let i = at(id);
+    if (!is_active(i)) { return; }
+    let w = lw(id.z);
+    // left, up-left, up, up-right: each 8-neighbour pair is visited once.
+    if (id.x > 0u && is_active(i - 1u)) { unite(i, i - 1u); }
+    if (id.y > 0u) {
+        let u = i - w;
+        if (id.x > 0u && is_active(u - 1u)) { unite(i, u - 1u); }
+        if (is_active(u)) { unite(i, u); }
+        if (id.x + 1u < w && is_active(u + 1u)) { unite(i, u + 1u); }
+    }
+}
+
+@compute @workgroup_size(16, 16, 1)
+fn compress(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (!inside(id)) { return; }
+    let i = at(id);
+    if (!is_active(i)) { return; }
+    // Roots do not change any more: every store writes a root, an ancestor
+    // of i, so concurrent finds still end at the same root.
+    atomicStore(&labels[i], find(i));
+}
+
+@compute @workgroup_size(16, 16, 1)
+fn flag(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (!inside(id)) { return; }
+    let i = at(id);
+    if (ruled[i] != STRONG) { return; }
+    // labels[i] is i's root after compress
+    atomicOr(&flags[atomicLoad(&labels[i])], 1u);
+}
+
+@compute @workgroup_size(16, 16, 1)
+fn final_edges(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (!inside(id)) { return; }
+    let i = at(id);
+    var e = 0u;
+    if (is_active(i) && atomicLoad(&flags[atomicLoad(&labels[i])]) == 1u) { e = EDGE; }
+    edges[i] = e;
+}

@@ -1,1 +1,41 @@
-// placeholder: luma is not written yet
+// SPEC 0: the input as 8-bit gray into level 0 of `gray`. Mirrors
+// src/image.rs (`luma_bt601`, `to_gray`).
+// Two entry points over level 0, one invocation per pixel:
+// - from_bytes: `input` holds the gray bytes, four pixels per word,
+//   little-endian, row-major, no row padding (the host's queue.write_buffer).
+// - from_texture: an Rgba8Unorm / Bgra8Unorm / R8Unorm texture. Each unorm
+//   value is the byte v / 255, so round(v * 255) recovers the byte exactly;
+//   then OpenCV's integer BT.601 (alpha ignored). `tex_kind.x` = 1 marks a
+//   one-channel texture: its red channel is the gray value itself.
+
+@group(0) @binding(1) var<storage, read> input: array<u32>;
+@group(0) @binding(2) var<storage, read_write> gray: array<u32>;
+@group(0) @binding(3) var tex: texture_2d<f32>;
+@group(0) @binding(4) var<uniform> tex_kind: vec4<u32>;
+
+// Y = (4899 R + 9617 G + 1868 B + 8192) >> 14, as lfast::image::luma_bt601.
+fn luma_bt601(r: u32, g: u32, b: u32) -> u32 {
+    return (4899u * r + 9617u * g + 1868u * b + 8192u) >> 14u;
+}
+
+fn unorm_byte(v: f32) -> u32 { return u32(round(clamp(v, 0.0, 1.0) * 255.0)); }
+
+@compute @workgroup_size(16, 16, 1)
+fn from_bytes(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= lw(0u) || id.y >= lh(0u)) { return; }
+    let i = id.y * lw(0u) + id.x;
+    gray[loff(0u) + i] = (input[i / 4u] >> (8u * (i % 4u))) & 255u;
+}
+
+@compute @workgroup_size(16, 16, 1)
+fn from_texture(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= lw(0u) || id.y >= lh(0u)) { return; }
+    // textureLoad returns the channels in logical order, so Bgra8Unorm reads
+    // as RGBA too.
+    let v = textureLoad(tex, vec2<u32>(id.x, id.y), 0);
+    var y = unorm_byte(v.r);
+    if (tex_kind.x == 0u) {
+        y = luma_bt601(unorm_byte(v.r), unorm_byte(v.g), unorm_byte(v.b));
+    }
+    gray[loff(0u) + id.y * lw(0u) + id.x] = y;
+}

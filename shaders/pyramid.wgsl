@@ -1,1 +1,54 @@
-// placeholder: pyramid is not written yet
+// SPEC 10: level l of the pyramid resized from level l-1 with integer
+// bilinear weights in Q11 (OpenCV INTER_LINEAR). Mirrors src/cpu/pyramid.rs
+// (`tap`, `resize_naive`). One dispatch per level: `level_index.x` = l,
+// given by the dynamic offset of `level_index` (record l at l * 256 bytes).
+
+const COEF_BITS: u32 = 11u;
+const ONE: u32 = 2048u; // 1 << COEF_BITS
+
+@group(0) @binding(1) var<uniform> level_index: vec4<u32>;
+@group(0) @binding(2) var<storage, read_write> gray: array<u32>;
+
+// Source index and Q11 weight of the right/lower neighbour for destination
+// index d when resizing src_len -> dst_len, exactly as cpu::pyramid::tap:
+// the source coordinate is ((2d+1)*src - dst) / (2*dst), clamped. Sides are
+// at most MAX_SIDE = 16384, so every product fits 32 bits.
+fn tap(d: u32, src_len: u32, dst_len: u32) -> vec2<u32> {
+    let a = (2u * d + 1u) * src_len;
+    let den = 2u * dst_len;
+    if (a < dst_len) { return vec2(0u, 0u); }
+    let num = a - dst_len;
+    let s = num / den;
+    if (s + 1u >= src_len) { return vec2(src_len - 1u, 0u); }
+    let rem = num - s * den;
+    // round(rem / den * 2048), half up
+    let w = (rem * ONE * 2u + den) / (2u * den);
+    return vec2(s, w);
+}
+
+@compute @workgroup_size(16, 16, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let l = level_index.x;
+    if (l == 0u || l >= P.n_levels) { return; }
+    let dw = lw(l);
+    let dh = lh(l);
+    if (id.x >= dw || id.y >= dh) { return; }
+    let p = l - 1u;
+    let sw = lw(p);
+    let sh = lh(p);
+    let tx = tap(id.x, sw, dw);
+    let ty = tap(id.y, sh, dh);
+    let sx0 = tx.x;
+    let sx1 = min(sx0 + 1u, sw - 1u);
+    let sy0 = ty.x;
+    let sy1 = min(sy0 + 1u, sh - 1u);
+    let r0 = loff(p) + sy0 * sw;
+    let r1 = loff(p) + sy1 * sw;
+    let wx = tx.y;
+    let wy = ty.y;
+    // Horizontal taps (< 2^19), then the vertical blend (< 2^30): no overflow.
+    let h0 = (ONE - wx) * gray[r0 + sx0] + wx * gray[r0 + sx1];
+    let h1 = (ONE - wx) * gray[r1 + sx0] + wx * gray[r1 + sx1];
+    let v = (ONE - wy) * h0 + wy * h1;
+    gray[loff(l) + id.y * dw + id.x] = (v + (1u << (2u * COEF_BITS - 1u))) >> (2u * COEF_BITS);
+}

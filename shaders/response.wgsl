@@ -1,1 +1,111 @@
-// placeholder: response is not written yet
+// SPEC 9: Harris corner response on D (7x7 block, 3x3 Sobel, k = 0.04), as
+// OpenCV ORB's HARRIS_SCORE. Mirrors src/cpu/response.rs.
+// `cand` (1 = candidate) + `denoised` -> `resp` (f32 bits) at candidates, 0
+// elsewhere. One invocation per pixel, all levels in one dispatch (z = level).
+//
+// Bit-identical to the CPU: the structure sums are exact integers, and the
+// final formula (harris_from_sums) is f32 in the CPU's operation order, with
+// every i32 -> f32 conversion rounded explicitly (to_f32) and every
+// intermediate passed through `opaque`, so that no compiler can contract
+// a*b + c into an fma or reassociate (Rust does neither).
+
+@group(0) @binding(1) var<storage, read> cand: array<u32>;
+@group(0) @binding(2) var<storage, read> denoised: array<u32>;
+@group(0) @binding(3) var<storage, read_write> resp: array<u32>;
+
+// BLOCK / 2.
+const R: i32 = 3;
+// HARRIS_K = 0.04f32.
+const HARRIS_K_BITS: u32 = 0x3d23d70au;
+// scale^4 with scale = 1 / (4 * BLOCK * 255) in f32, multiplied left to right
+// as the CPU does (3.8477533e-16; tests/gpu_keypoints.rs checks the bits).
+const SCALE_SQ_SQ_BITS: u32 = 0x25ddced1u;
+
+// x, opaque to the compiler: OR-ing its bits with a runtime zero
+// (Params.scales[l].w is always 0.0, see src/gpu/layout.rs) makes it a value
+// the compiler knows nothing about. Every intermediate of the formula goes
+// through it, so each operation is rounded on its own as written: no a*b + c
+// contracted into an fma, no reassociation (lavapipe, for one, reassociates
+// products with a constant: without this, K * (s * s) gave (K * s) * s's bits).
+fn opaque(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) | bitcast<u32>(P.scales[0].w));
+}
+
+// i32 -> f32 rounded to nearest, ties to even (Rust's `as f32`), done in
+// integers so that it does not depend on the device's conversion rounding.
+// |v| < 2^31 (the sums are below 49 * 1020^2 < 2^26).
+fn to_f32(v: i32) -> f32 {
+    let m = u32(abs(v));
+    var r = m;
+    if (m >= (1u << 24u)) {
+        let sh = firstLeadingBit(m) - 23u; // bits below the 24-bit significand
+        let q = m >> sh;
+        let rem = m & ((1u << sh) - 1u);
+        let half = 1u << (sh - 1u);
+        var up = q;
+        if (rem > half || (rem == half && (q & 1u) == 1u)) { up = q + 1u; }
+        r = up << sh; // at most 2^26: exactly representable
+    }
+    let f = f32(r); // exact: r has at most 24 significant bits
+    return select(f, -f, v < 0);
+}
+
+// OpenCV's Harris response from the integer sums, as harris_from_sums:
+// (a * b - c * c - K * (a + b) * (a + b)) * scale_sq_sq, left to right.
+fn harris_from_sums(ai: i32, bi: i32, ci: i32) -> f32 {
+    let a = to_f32(ai);
+    let b = to_f32(bi);
+    let c = to_f32(ci);
+    let k = opaque(bitcast<f32>(HARRIS_K_BITS));
+    let scale_sq_sq = opaque(bitcast<f32>(SCALE_SQ_SQ_BITS));
+    let ab = opaque(a * b);
+    let cc = opaque(c * c);
+    let d = opaque(ab - cc);
+    let s = opaque(a + b);
+    let ks = opaque(k * s);
+    let kss = opaque(ks * s);
+    let e = opaque(d - kss);
+    return e * scale_sq_sq;
+}
+
+fn px(l: u32, x: i32, y: i32) -> i32 { return i32(denoised[clamped(l, x, y)]); }
+
+// The integer structure-tensor sums (a, b, c) = (ΣIx², ΣIy², ΣIxIy) over the
+// 7x7 block centred on (x, y), reads clamped, as structure_sums. The 9x9
+// footprint is read once into `win` (win[j][i] = D(x - 4 + i, y - 4 + j)).
+fn structure_sums(l: u32, x: i32, y: i32) -> vec3<i32> {
+    var win: array<array<i32, 9>, 9>;
+    for (var j = 0; j < 9; j++) {
+        for (var i = 0; i < 9; i++) {
+            win[j][i] = px(l, x - R - 1 + i, y - R - 1 + j);
+        }
+    }
+    var a = 0;
+    var b = 0;
+    var c = 0;
+    for (var by = 1; by <= 2 * R + 1; by++) {
+        for (var bx = 1; bx <= 2 * R + 1; bx++) {
+            let ix = (win[by][bx + 1] - win[by][bx - 1]) * 2 + (win[by - 1][bx + 1] - win[by - 1][bx - 1])
+                + (win[by + 1][bx + 1] - win[by + 1][bx - 1]);
+            let iy = (win[by + 1][bx] - win[by - 1][bx]) * 2 + (win[by + 1][bx - 1] - win[by - 1][bx - 1])
+                + (win[by + 1][bx + 1] - win[by - 1][bx + 1]);
+            a += ix * ix;
+            b += iy * iy;
+            c += ix * iy;
+        }
+    }
+    return vec3(a, b, c);
+}
+
+@compute @workgroup_size(16, 16, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let l = id.z;
+    if (id.x >= lw(l) || id.y >= lh(l)) { return; }
+    let i = loff(l) + id.y * lw(l) + id.x;
+    var out = 0u;
+    if (cand[i] != 0u) {
+        let s = structure_sums(l, i32(id.x), i32(id.y));
+        out = bitcast<u32>(harris_from_sums(s.x, s.y, s.z));
+    }
+    resp[i] = out;
+}

@@ -1,1 +1,191 @@
-// placeholder: select is not written yet
+// SPEC 9: the n_features cap and the deterministic output order. Mirrors
+// src/cpu/select.rs (select with distribution = false; the quadtree is not
+// done on the GPU). `corners` (unordered, counters[CORNERS] of them) ->
+// `keypoints` in SPEC 9 order: response descending (f32 total order), then
+// level, y, x ascending.
+//
+// Entry points, in recording order:
+// - args (1 invocation): indirect args over the corner list, resets TAKEN.
+// - rank_level (indirect, 64 per group): each corner counts the corners of its
+//   level that precede it; it is "taken" iff that count < quota(level) (a level
+//   keeps its best up to its quota). No cap (n_features = 0): all are taken.
+// - place (indirect): each corner counts the taken (T) and not taken (U)
+//   corners that precede it. The not-taken corners that fill the spare quota
+//   are the first `spare` of them in order, so a corner is selected iff it is
+//   taken or U < spare, and its output index is T + min(U, spare).
+// - finish (1 invocation): the final count, indirect args and draw args.
+// Both rank loops are O(n^2) over the corner list, tiled through workgroup
+// memory. Positions are unique, so the order is total and the output deterministic.
+
+// src/gpu/buffers.rs's GpuKeypoint, 12 words.
+struct Kp {
+    x: f32,
+    y: f32,
+    size: f32,
+    angle: f32,
+    response: f32,
+    level: u32,
+    px: u32,
+    py: u32,
+    m10: i32,
+    m01: i32,
+    bin: u32,
+    pad: u32,
+}
+
+@group(0) @binding(1) var<storage, read> corners: array<Kp>;
+@group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;
+// Per corner: order key, taken (0/1), preceding corners of its level, 0.
+@group(0) @binding(3) var<storage, read_write> ranks: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read_write> keypoints: array<Kp>;
+@group(0) @binding(5) var<storage, read_write> indirect: array<u32>;
+
+// counter::* in src/gpu/buffers.rs.
+const C_CORNERS: u32 = 0u;
+const C_KEYPOINTS: u32 = 1u;
+const C_TAKEN: u32 = 2u;
+// indirect::* in src/gpu/buffers.rs, in words.
+const I_CORNERS: u32 = 0u;
+const I_KEYPOINTS: u32 = 4u;
+const I_DRAW: u32 = 8u;
+
+const GROUP: u32 = 64u;
+
+// Corners in the list (a count past the capacity cannot happen; clamp anyway).
+fn corner_count() -> u32 { return min(atomicLoad(&counters[C_CORNERS]), P.capacity); }
+
+// f32 total order (Rust's total_cmp) as u32 order: negative -> !bits, else
+// bits | sign, so -0.0 < +0.0 and every negative is below every positive.
+fn order_key(r: f32) -> u32 {
+    let b = bitcast<u32>(r);
+    return select(b | 0x80000000u, ~b, (b >> 31u) == 1u);
+}
+
+// True iff corner j comes before corner i in SPEC 9 order (cpu::select::order):
+// greater key first, then level, y, x ascending. `pos` = (level, y, x).
+fn precedes(kj: u32, pj: vec3<u32>, ki: u32, pi: vec3<u32>) -> bool {
+    if (kj != ki) { return kj > ki; }
+    if (pj.x != pi.x) { return pj.x < pi.x; }
+    if (pj.y != pi.y) { return pj.y < pi.y; }
+    return pj.z < pi.z;
+}
+
+fn pos_of(k: Kp) -> vec3<u32> { return vec3(k.level, k.py, k.px); }
+
+// Quota left for the best not-taken corners of any level.
+fn spare() -> u32 {
+    let taken = atomicLoad(&counters[C_TAKEN]);
+    return select(0u, P.n_features - taken, P.n_features > taken);
+}
+
+fn write_dispatch(at: u32, n: u32) {
+    indirect[at] = (n + GROUP - 1u) / GROUP;
+    indirect[at + 1u] = 1u;
+    indirect[at + 2u] = 1u;
+}
+
+@compute @workgroup_size(1)
+fn args() {
+    write_dispatch(I_CORNERS, corner_count());
+    atomicStore(&counters[C_TAKEN], 0u);
+    atomicStore(&counters[C_KEYPOINTS], 0u);
+}
+
+var<workgroup> tile_key: array<u32, GROUP>;
+var<workgroup> tile_pos: array<vec3<u32>, GROUP>;
+var<workgroup> tile_taken: array<u32, GROUP>;
+var<workgroup> wg_n: u32;
+
+// The corner count as a workgroup-uniform value (the loop below has barriers).
+fn uniform_count(li: u32) -> u32 {
+    if (li == 0u) { wg_n = corner_count(); }
+    return workgroupUniformLoad(&wg_n);
+}
+
+@compute @workgroup_size(64)
+fn rank_level(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let n = uniform_count(li);
+    let i = gid.x;
+    let live = i < n;
+    var ki = 0u;
+    var pi = vec3(0u);
+    if (live) {
+        ki = order_key(corners[i].response);
+        pi = pos_of(corners[i]);
+    }
+    // Without a cap every corner is taken: no need to count.
+    let m = select(n, 0u, P.n_features == 0u);
+    var before = 0u;
+    for (var t = 0u; t < m; t += GROUP) {
+        let j = t + li;
+        if (j < m) {
+            tile_key[li] = order_key(corners[j].response);
+            tile_pos[li] = pos_of(corners[j]);
+        }
+        workgroupBarrier();
+        let len = min(GROUP, m - t);
+        if (live) {
+            for (var k = 0u; k < len; k++) {
+                if (tile_pos[k].x == pi.x && precedes(tile_key[k], tile_pos[k], ki, pi)) { before++; }
+            }
+        }
+        workgroupBarrier();
+    }
+    if (live) {
+        let taken = P.n_features == 0u || before < quota(pi.x);
+        ranks[i] = vec4(ki, u32(taken), before, 0u);
+        if (taken) { atomicAdd(&counters[C_TAKEN], 1u); }
+    }
+}
+
+@compute @workgroup_size(64)
+fn place(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let n = uniform_count(li);
+    let i = gid.x;
+    let live = i < n;
+    var ki = 0u;
+    var pi = vec3(0u);
+    if (live) {
+        ki = ranks[i].x;
+        pi = pos_of(corners[i]);
+    }
+    var taken_before = 0u;
+    var rest_before = 0u;
+    for (var t = 0u; t < n; t += GROUP) {
+        let j = t + li;
+        if (j < n) {
+            tile_key[li] = ranks[j].x;
+            tile_taken[li] = ranks[j].y;
+            tile_pos[li] = pos_of(corners[j]);
+        }
+        workgroupBarrier();
+        let len = min(GROUP, n - t);
+        if (live) {
+            for (var k = 0u; k < len; k++) {
+                if (precedes(tile_key[k], tile_pos[k], ki, pi)) {
+                    if (tile_taken[k] == 1u) { taken_before++; } else { rest_before++; }
+                }
+            }
+        }
+        workgroupBarrier();
+    }
+    if (!live) { return; }
+    let sp = spare();
+    if (ranks[i].y == 1u || rest_before < sp) {
+        let at = taken_before + min(rest_before, sp);
+        if (at < P.capacity) { keypoints[at] = corners[i]; }
+    }
+}
+
+@compute @workgroup_size(1)
+fn finish() {
+    let n = corner_count();
+    let taken = atomicLoad(&counters[C_TAKEN]);
+    let count = taken + min(spare(), n - taken);
+    atomicStore(&counters[C_KEYPOINTS], count);
+    write_dispatch(I_KEYPOINTS, count);
+    indirect[I_DRAW] = 4u;
+    indirect[I_DRAW + 1u] = count;
+    indirect[I_DRAW + 2u] = 0u;
+    indirect[I_DRAW + 3u] = 0u;
+}

@@ -11,6 +11,7 @@ pub mod baseline;
 pub mod cli;
 pub mod config;
 pub mod cpu;
+mod detector;
 pub mod error;
 pub mod image;
 pub mod io;
@@ -18,6 +19,7 @@ mod keypoint;
 pub mod gpu;
 
 pub use config::{Config, Mode};
+pub use detector::{Backend, Detector};
 pub use error::{Error, Result};
 pub use image::{GrayView, Plane};
 pub use keypoint::{Descriptor, KeyPoint, hamming};

@@ -73,11 +73,54 @@ pub mod counter {
     pub const LEN: usize = 4;
 }
 
+/// How much the buffers were allocated for; a frame whose layout fits reuses them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Allocated {
+    /// Pixels per atlas.
+    pub px: u64,
+    /// Keypoint slots.
+    pub keypoints: u64,
+    /// Windows.
+    pub windows: u64,
+    /// Words of the grid buffer.
+    pub grid: u64,
+    /// Bytes of the input buffer.
+    pub input: u64,
+    /// Levels (histograms, Otsu).
+    pub levels: u64,
+}
+
+impl Allocated {
+    fn of(layout: &FrameLayout) -> Self {
+        let (w, h) = layout.sizes[0];
+        Self {
+            px: layout.total_px as u64,
+            keypoints: layout.capacity as u64,
+            windows: layout.total_windows as u64,
+            grid: layout.grid_data.len() as u64,
+            input: (w as u64 * h as u64).next_multiple_of(4),
+            levels: layout.n_levels() as u64,
+        }
+    }
+
+    /// True when every buffer allocated for `self` is large enough for `other`.
+    pub fn holds(&self, other: &Allocated) -> bool {
+        self.px >= other.px
+            && self.keypoints >= other.keypoints
+            && self.windows >= other.windows
+            && self.grid >= other.grid
+            && self.input >= other.input
+            && self.levels >= other.levels
+    }
+}
+
 /// The named buffers of one frame size.
 #[derive(Debug)]
 pub struct Buffers {
     /// What lies where.
     pub layout: FrameLayout,
+    /// What the buffers can hold.
+    pub allocated: Allocated,
     /// `Params` (binding 0 of every pass).
     pub params: wgpu::Buffer,
     /// `MAX_LEVELS` records of 256 bytes, record l = `[l, 0, 0, 0]`, for
@@ -238,9 +281,29 @@ impl Buffers {
             blur_tmp: px("blur_tmp"),
             patterns: init("patterns", bytemuck::cast_slice(&patterns), storage),
             angle_bounds: init("angle_bounds", bytemuck::cast_slice(&angle_bounds), storage),
+            allocated: Allocated::of(&layout),
             layout,
         };
         Ok(this)
+    }
+
+    /// Lays a `width x height` frame out in the existing buffers when they are
+    /// large enough (writing the new `Params` and grid through `queue`), and
+    /// returns false, changing nothing, when they are not.
+    pub fn relayout(&mut self, queue: &wgpu::Queue, cfg: &Config, width: u32, height: u32) -> bool {
+        let layout = FrameLayout::new(cfg, width, height);
+        if !self.allocated.holds(&Allocated::of(&layout)) {
+            return false;
+        }
+        let mut p = layout.params;
+        p.use_mask = self.layout.params.use_mask;
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        if !layout.grid_data.is_empty() {
+            queue.write_buffer(&self.grid, 0, bytemuck::cast_slice(&layout.grid_data));
+        }
+        self.layout = layout;
+        self.layout.params = p;
+        true
     }
 
     /// Width and height of level 0.

@@ -1,8 +1,91 @@
-//! SPEC stage `hysteresis` on the GPU (not written yet).
+//! SPEC 7 rule 3 (hysteresis) on the GPU: shaders/hysteresis.wgsl, mirroring
+//! src/cpu/hysteresis.rs. `ruled` -> `edges` (255 / 0), all levels at once, by
+//! union-find connected-component labelling in five dispatches (init, merge,
+//! compress, flag, final_edges): exact after a fixed number of dispatches,
+//! with no read-back and no iteration cap (the shader argues why).
 
-use super::kernel::{Binding, PARAMS};
+use super::buffers::Buffers;
+use super::kernel::{Binding, Kernel, PARAMS, Slot, b, full_source};
+use super::pass::Pass;
+use crate::error::Result;
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/hysteresis.wgsl");
-/// Its bindings.
-pub const BINDINGS: &[Binding] = &[PARAMS];
+/// Its bindings (shared by every entry point).
+pub const BINDINGS: &[Binding] = &[
+    PARAMS,
+    b(1, "ruled", Slot::Read),
+    b(2, "labels", Slot::ReadWrite),
+    b(3, "flags", Slot::ReadWrite),
+    b(4, "edges", Slot::ReadWrite),
+];
+
+/// The entry points in dispatch order.
+pub const ENTRIES: [&str; 5] = ["init", "merge", "compress", "flag", "final_edges"];
+
+/// The hysteresis pass.
+#[derive(Debug)]
+pub struct HysteresisPass {
+    /// One kernel per entry of [`ENTRIES`], same order.
+    kernels: Vec<Kernel>,
+}
+
+/// One bind group per kernel (each has its own layout object).
+#[derive(Debug)]
+pub struct HysteresisBound {
+    groups: Vec<wgpu::BindGroup>,
+}
+
+impl Pass for HysteresisPass {
+    type Bound = HysteresisBound;
+    const NAME: &'static str = "hysteresis";
+
+    fn new(device: &wgpu::Device) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(Self::NAME),
+            source: wgpu::ShaderSource::Wgsl(full_source(SOURCE).into()),
+        });
+        let kernels = ENTRIES
+            .iter()
+            .map(|e| {
+                Kernel::from_module(
+                    device,
+                    &format!("{}::{e}", Self::NAME),
+                    &module,
+                    e,
+                    BINDINGS,
+                )
+            })
+            .collect();
+        Self { kernels }
+    }
+
+    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<HysteresisBound> {
+        let buffers = [
+            ("P", &b.params),
+            ("ruled", &b.ruled),
+            ("labels", &b.labels),
+            ("flags", &b.flags),
+            ("edges", &b.edges),
+        ];
+        let groups = self
+            .kernels
+            .iter()
+            .map(|k| k.bind(device, &buffers))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(HysteresisBound { groups })
+    }
+
+    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &HysteresisBound, b: &Buffers) {
+        // wgpu orders the dispatches of one compute pass (each sees the
+        // storage writes of the previous one).
+        for (k, g) in self.kernels.iter().zip(&bound.groups) {
+            k.dispatch(pass, g, b.layout.pixel_groups());
+        }
+    }
+
+    fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
+        // `flag` only ever sets flags of roots to 1: start from all zero.
+        encoder.clear_buffer(&b.flags, 0, None);
+    }
+}

@@ -10,6 +10,7 @@ pub mod buffers;
 pub mod classify;
 pub mod context;
 pub mod corner_nms;
+pub mod detector;
 pub mod gradient;
 pub mod histogram;
 pub mod hysteresis;
@@ -33,6 +34,7 @@ pub mod testing;
 
 pub use buffers::{Buffers, GpuKeypoint};
 pub use context::{GpuContext, GpuOptions, list_adapters};
+pub use detector::{Frame, GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
 pub use layout::FrameLayout;
 pub use pass::Pass;
 

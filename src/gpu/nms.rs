@@ -1,8 +1,52 @@
-//! SPEC stage `nms` on the GPU (not written yet).
+//! SPEC 3 on the GPU: shaders/nms.wgsl, mirroring src/cpu/nms.rs.
+//! `gx`, `gy`, `s` -> `nms` (1 = survivor), all levels in one dispatch.
 
-use super::kernel::{Binding, PARAMS};
+use super::buffers::Buffers;
+use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
+use super::pass::Pass;
+use crate::error::Result;
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/nms.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] = &[PARAMS];
+pub const BINDINGS: &[Binding] = &[
+    PARAMS,
+    b(1, "gx", Slot::Read),
+    b(2, "gy", Slot::Read),
+    b(3, "s", Slot::Read),
+    b(4, "nms", Slot::ReadWrite),
+];
+
+/// The gradient non-maximum suppression pass.
+#[derive(Debug)]
+pub struct NmsPass {
+    kernel: Kernel,
+}
+
+impl Pass for NmsPass {
+    type Bound = wgpu::BindGroup;
+    const NAME: &'static str = "nms";
+
+    fn new(device: &wgpu::Device) -> Self {
+        Self {
+            kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS),
+        }
+    }
+
+    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
+        self.kernel.bind(
+            device,
+            &[
+                ("P", &b.params),
+                ("gx", &b.gx),
+                ("gy", &b.gy),
+                ("s", &b.s),
+                ("nms", &b.nms),
+            ],
+        )
+    }
+
+    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
+        self.kernel.dispatch(pass, bound, b.layout.pixel_groups());
+    }
+}

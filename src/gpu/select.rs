@@ -1,8 +1,104 @@
-//! SPEC stage `select` on the GPU (not written yet).
+//! SPEC 9 (the `n_features` cap and the output order) on the GPU:
+//! shaders/select.wgsl, mirroring `cpu::select::select` with
+//! `distribution = false` (the quadtree distribution is not done on the GPU).
+//! `corners` + `counters[counter::CORNERS]` -> `keypoints` in SPEC 9 order,
+//! `counters[counter::KEYPOINTS]`, and the `indirect` args over corners,
+//! keypoints and the keypoint draw. `ranks` is scratch.
 
-use super::kernel::{Binding, PARAMS};
+use super::buffers::{Buffers, indirect};
+use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
+use super::pass::Pass;
+use crate::error::Result;
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/select.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] = &[PARAMS];
+pub const BINDINGS: &[Binding] = &[
+    PARAMS,
+    b(1, "corners", Slot::Read),
+    b(2, "counters", Slot::ReadWrite),
+    b(3, "ranks", Slot::ReadWrite),
+    b(4, "keypoints", Slot::ReadWrite),
+    b(5, "indirect", Slot::ReadWrite),
+];
+
+/// The bindings of the indirectly dispatched entry points: all but
+/// `indirect`, which those dispatches read their sizes from (a buffer may not
+/// be bound as storage while it is the dispatch's indirect buffer).
+const RANK_BINDINGS: &[Binding] = &[
+    PARAMS,
+    b(1, "corners", Slot::Read),
+    b(2, "counters", Slot::ReadWrite),
+    b(3, "ranks", Slot::ReadWrite),
+    b(4, "keypoints", Slot::ReadWrite),
+];
+
+/// The select pass: four entry points of one shader.
+#[derive(Debug)]
+pub struct SelectPass {
+    args: Kernel,
+    rank_level: Kernel,
+    place: Kernel,
+    finish: Kernel,
+}
+
+/// [`SelectPass`]'s bind groups.
+#[derive(Debug)]
+pub struct SelectBound {
+    /// For `args` and `finish` (with `indirect`).
+    full: wgpu::BindGroup,
+    /// For `rank_level` and `place` (without `indirect`).
+    rank: wgpu::BindGroup,
+}
+
+impl Pass for SelectPass {
+    type Bound = SelectBound;
+    const NAME: &'static str = "select";
+
+    fn new(device: &wgpu::Device) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(Self::NAME),
+            source: wgpu::ShaderSource::Wgsl(super::kernel::full_source(SOURCE).into()),
+        });
+        let k = |entry: &str, bindings| {
+            Kernel::from_module(
+                device,
+                &format!("select::{entry}"),
+                &module,
+                entry,
+                bindings,
+            )
+        };
+        Self {
+            args: k("args", BINDINGS),
+            rank_level: k("rank_level", RANK_BINDINGS),
+            place: k("place", RANK_BINDINGS),
+            finish: k("finish", BINDINGS),
+        }
+    }
+
+    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<SelectBound> {
+        let common = [
+            ("P", &b.params),
+            ("corners", &b.corners),
+            ("counters", &b.counters),
+            ("ranks", &b.ranks),
+            ("keypoints", &b.keypoints),
+        ];
+        let mut full = common.to_vec();
+        full.push(("indirect", &b.indirect));
+        Ok(SelectBound {
+            full: self.args.bind(device, &full)?,
+            rank: self.rank_level.bind(device, &common)?,
+        })
+    }
+
+    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &SelectBound, b: &Buffers) {
+        self.args.dispatch(pass, &bound.full, [1, 1, 1]);
+        self.rank_level
+            .dispatch_indirect(pass, &bound.rank, &b.indirect, indirect::CORNERS);
+        self.place
+            .dispatch_indirect(pass, &bound.rank, &b.indirect, indirect::CORNERS);
+        self.finish.dispatch(pass, &bound.full, [1, 1, 1]);
+    }
+}

@@ -1,0 +1,179 @@
+//! [`Detector`]: one front door over the GPU and CPU paths.
+
+use crate::config::Config;
+use crate::cpu::CpuDetector;
+use crate::error::{Error, Result};
+use crate::gpu::detector::{GpuDetector, GpuWorkspace};
+use crate::gpu::{GpuContext, GpuOptions};
+use crate::image::{GrayView, Plane};
+use crate::keypoint::{Descriptor, KeyPoint};
+use std::sync::Mutex;
+
+/// Which path runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    /// The GPU when an adapter opens, else the CPU with a logged warning.
+    #[default]
+    Auto,
+    /// The GPU or an error.
+    Gpu,
+    /// The CPU reference path.
+    Cpu,
+}
+
+impl std::str::FromStr for Backend {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "auto" => Ok(Backend::Auto),
+            "gpu" => Ok(Backend::Gpu),
+            "cpu" => Ok(Backend::Cpu),
+            _ => Err(Error::InvalidConfig { field: "backend", reason: format!("must be auto, gpu or cpu, got `{s}`") }),
+        }
+    }
+}
+
+struct Gpu {
+    det: GpuDetector,
+    ws: Mutex<Option<GpuWorkspace>>,
+}
+
+/// L-FAST on the GPU or the CPU, with the same results (see docs/algorithm.md).
+///
+/// ```
+/// use lfast::{Backend, Config, Detector};
+/// let det = Detector::new(Config::default(), Backend::Cpu).unwrap();
+/// let img = lfast::Plane::<u8>::new(64, 48);
+/// let (kps, _desc) = det.detect_and_compute(img.view(), None).unwrap();
+/// assert!(kps.is_empty());
+/// assert_eq!(det.backend_name(), "cpu");
+/// ```
+pub struct Detector {
+    cpu: CpuDetector,
+    gpu: Option<Gpu>,
+    /// Auto mode: fall back to the CPU on GPU failures.
+    auto: bool,
+    /// Set once the GPU failed in Auto mode; later frames go to the CPU.
+    fell_back: std::sync::atomic::AtomicBool,
+}
+
+impl std::fmt::Debug for Detector {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Detector").field("backend", &self.backend_name()).finish()
+    }
+}
+
+impl Detector {
+    /// A detector on `backend`, choosing the adapter from the environment
+    /// (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`).
+    pub fn new(cfg: Config, backend: Backend) -> Result<Self> {
+        Self::with_gpu_options(cfg, backend, &GpuOptions::default())
+    }
+
+    /// [`new`](Self::new) with explicit adapter options.
+    pub fn with_gpu_options(cfg: Config, backend: Backend, opts: &GpuOptions) -> Result<Self> {
+        let cpu = CpuDetector::new(cfg.clone())?;
+        let auto = backend == Backend::Auto;
+        let gpu = match backend {
+            Backend::Cpu => None,
+            Backend::Gpu => Some(GpuContext::new(opts).and_then(|ctx| GpuDetector::new(ctx, cfg))?),
+            Backend::Auto => match GpuContext::new(opts).and_then(|ctx| GpuDetector::new(ctx, cfg)) {
+                Ok(d) => Some(d),
+                Err(e) => {
+                    log::warn!("GPU unavailable ({e}); using the CPU path");
+                    None
+                }
+            },
+        };
+        Ok(Self {
+            cpu,
+            gpu: gpu.map(|det| Gpu { det, ws: Mutex::new(None) }),
+            auto,
+            fell_back: Default::default(),
+        })
+    }
+
+    /// A detector on an embedder's device.
+    pub fn from_context(ctx: GpuContext, cfg: Config) -> Result<Self> {
+        let cpu = CpuDetector::new(cfg.clone())?;
+        let det = GpuDetector::new(ctx, cfg)?;
+        Ok(Self { cpu, gpu: Some(Gpu { det, ws: Mutex::new(None) }), auto: false, fell_back: Default::default() })
+    }
+
+    /// `"gpu"` or `"cpu"`: what the next frame runs on.
+    pub fn backend_name(&self) -> &'static str {
+        if self.active_gpu().is_some() { "gpu" } else { "cpu" }
+    }
+
+    /// The GPU adapter's name, when the GPU is in use.
+    pub fn adapter_name(&self) -> Option<String> {
+        self.active_gpu().map(|g| g.det.context().info.name.clone())
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        self.cpu.config()
+    }
+
+    fn active_gpu(&self) -> Option<&Gpu> {
+        self.gpu.as_ref().filter(|_| !self.fell_back.load(std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// Runs `f` on the GPU; in Auto mode a GPU failure (device lost, out of
+    /// memory, a frame over the device's limits) is logged and the frame goes
+    /// to the CPU — and so do later frames after a device loss.
+    fn run<T>(
+        &self,
+        on_gpu: impl FnOnce(&GpuDetector, &mut Option<GpuWorkspace>) -> Result<T>,
+        on_cpu: impl FnOnce(&CpuDetector) -> Result<T>,
+    ) -> Result<T> {
+        let Some(g) = self.active_gpu() else { return on_cpu(&self.cpu) };
+        let r = {
+            let mut ws = g.ws.lock().map_err(|_| Error::Gpu { reason: "workspace lock poisoned".into() })?;
+            on_gpu(&g.det, &mut ws)
+        };
+        match r {
+            Ok(v) => Ok(v),
+            // bad input is the caller's error on either path
+            Err(e @ (Error::InvalidImage { .. } | Error::MaskSize { .. } | Error::InvalidConfig { .. })) => Err(e),
+            Err(e) if self.auto => {
+                if matches!(e, Error::DeviceLost { .. } | Error::Gpu { .. }) {
+                    self.fell_back.store(true, std::sync::atomic::Ordering::Relaxed);
+                    log::warn!("GPU failed ({e}); this and later frames run on the CPU");
+                } else {
+                    log::warn!("GPU cannot take this frame ({e}); it runs on the CPU");
+                }
+                on_cpu(&self.cpu)
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Keypoints and descriptors (SPEC 1-11); `desc[i]` belongs to `kps[i]`.
+    pub fn detect_and_compute(
+        &self,
+        image: GrayView<'_>,
+        mask: Option<GrayView<'_>>,
+    ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
+        image.check()?;
+        if image.width() == 0 || image.height() == 0 {
+            return self.cpu.detect_and_compute(image, mask);
+        }
+        self.run(
+            |g, ws| g.detect_and_compute(ws, image, mask).map(|f| (f.keypoints, f.descriptors)),
+            |c| c.detect_and_compute(image, mask),
+        )
+    }
+
+    /// Keypoints only.
+    pub fn detect(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<Vec<KeyPoint>> {
+        self.detect_and_compute(image, mask).map(|(k, _)| k)
+    }
+
+    /// The improved Canny edge map E (255 = edge).
+    pub fn edge_image(&self, image: GrayView<'_>) -> Result<Plane<u8>> {
+        image.check()?;
+        self.run(|g, ws| g.edge_image(ws, image), |c| c.edge_image(image))
+    }
+}
