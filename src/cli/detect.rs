@@ -88,15 +88,21 @@ pub(super) struct DetectArgs {
 
 /// A detector of any kind.
 enum Det {
-    Lfast(CpuDetector),
+    Lfast(crate::Detector),
     Fast { describe: CpuDetector, threshold: i32, cap: u32 },
     Orb(OrbDetector),
 }
 
 impl Det {
-    fn new(kind: DetectorKind, cfg: Config, fast_threshold: i32) -> Result<Self, CliError> {
+    fn new(kind: DetectorKind, cfg: Config, fast_threshold: i32, common: &Common) -> Result<Self, CliError> {
+        if kind != DetectorKind::Lfast && common.backend()?.0 == crate::Backend::Gpu {
+            return Err(CliError::Usage(format!(
+                "--detector {} runs on the CPU only (a baseline for comparisons); use --backend cpu or auto",
+                if kind == DetectorKind::Fast { "fast" } else { "orb" }
+            )));
+        }
         Ok(match kind {
-            DetectorKind::Lfast => Det::Lfast(CpuDetector::new(cfg)?),
+            DetectorKind::Lfast => Det::Lfast(common.detector(cfg)?),
             DetectorKind::Fast => {
                 let cap = cfg.n_features;
                 Det::Fast { describe: CpuDetector::new(cfg)?, threshold: fast_threshold, cap }
@@ -211,9 +217,12 @@ fn write_all(job: &Job, formats: &[Format], st: &Stage) -> crate::Result<()> {
 
 /// Runs `lfast detect`; `Ok(false)` when some file failed.
 pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
-    let backend = a.common.backend()?;
     let cfg = a.common.config()?;
-    let det = Det::new(a.detector, cfg, a.fast_threshold)?;
+    let det = Det::new(a.detector, cfg, a.fast_threshold, &a.common)?;
+    let backend = match &det {
+        Det::Lfast(d) => d.backend_name(),
+        _ => "cpu",
+    };
     let pool = a.common.pool()?;
     super::report::prepare_out_dir(&a.out)?;
     let all = inputs::collect(&a.inputs, a.from_list.as_deref(), &a.out)?;

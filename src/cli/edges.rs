@@ -4,7 +4,7 @@
 use super::inputs::{self, Input};
 use super::report::{self, Reporter};
 use super::{CliError, Common};
-use crate::cpu::{CpuDetector, classify};
+use crate::cpu::classify;
 use image::ExtendedColorType;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -64,7 +64,7 @@ fn class_colour(c: u8) -> [u8; 3] {
 /// Files to write, (path, bytes), and the edge pixel count.
 type Processed = (Vec<(PathBuf, Vec<u8>)>, u64);
 
-fn process(det: &CpuDetector, input: &Input, edges_path: &Path, debug: bool) -> crate::Result<Processed> {
+fn process(det: &crate::Detector, input: &Input, edges_path: &Path, debug: bool) -> crate::Result<Processed> {
     let img = crate::image::load_gray(&input.path)?;
     let png = super::draw::png;
     if !debug {
@@ -72,7 +72,8 @@ fn process(det: &CpuDetector, input: &Input, edges_path: &Path, debug: bool) -> 
         let n = e.data.iter().filter(|&&v| v != 0).count() as u64;
         return Ok((vec![(edges_path.to_path_buf(), png(&e.data, e.width, e.height, ExtendedColorType::L8)?)], n));
     }
-    let em = det.edges(img.view())?;
+    // the intermediates come from the CPU's staged path (equal to the GPU's, tested)
+    let em = crate::cpu::edge_map(&img, det.config());
     let (w, h) = (em.edges.width, em.edges.height);
     let n = em.edges.data.iter().filter(|&&v| v != 0).count() as u64;
     let base = edges_path.with_file_name(
@@ -107,8 +108,8 @@ fn write(files: &[(PathBuf, Vec<u8>)]) -> crate::Result<()> {
 
 /// Runs `lfast edges`; `Ok(false)` when some file failed.
 pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
-    let backend = a.common.backend()?;
-    let det = CpuDetector::new(a.common.config()?)?;
+    let det = a.common.detector(a.common.config()?)?;
+    let backend = det.backend_name();
     let pool = a.common.pool()?;
     // One input file and --out FILE.png: write there (the single-image form).
     let single = a.inputs.len() == 1

@@ -1,12 +1,38 @@
-//! `lfast info`: backends and CPU features of this build.
+//! `lfast info`: GPU adapters, the one chosen and its limits, the CPU fallback.
 
 use super::CliError;
+use crate::gpu::{GpuContext, GpuOptions, list_adapters};
 
-/// Prints what this build can use.
-pub(super) fn run() -> Result<bool, CliError> {
-    println!("lfast {}", env!("CARGO_PKG_VERSION"));
-    println!("GPU backend: not built in this version (no adapters enumerated; --backend gpu fails)");
-    println!("backend in use: cpu (the CPU reference path; --backend auto and cpu both use it)");
+/// Prints what this machine offers; `adapter` as `--adapter`.
+pub(super) fn run(adapter: Option<String>) -> Result<bool, CliError> {
+    println!("lfast {} (wgpu 30)", env!("CARGO_PKG_VERSION"));
+    let opts = GpuOptions { adapter_name: adapter, ..Default::default() };
+    let env = |k: &str| std::env::var(k).unwrap_or_else(|_| "(unset)".into());
+    println!("WGPU_BACKEND={} WGPU_ADAPTER_NAME={}", env("WGPU_BACKEND"), env("WGPU_ADAPTER_NAME"));
+    let all = list_adapters(&opts);
+    println!("GPU adapters found: {}", all.len());
+    for a in &all {
+        println!("  - {} ({:?}, {:?}, driver {} {})", a.name, a.backend, a.device_type, a.driver, a.driver_info);
+    }
+    match GpuContext::new(&opts) {
+        Ok(ctx) => {
+            let l = ctx.device.limits();
+            println!("GPU chosen: {} ({:?})", ctx.info.name, ctx.info.backend);
+            println!(
+                "  limits: max buffer {} MiB, storage binding {} MiB, workgroups per dimension {}, invocations per workgroup {}",
+                l.max_buffer_size >> 20,
+                (l.max_storage_buffer_binding_size as u64) >> 20,
+                l.max_compute_workgroups_per_dimension,
+                l.max_compute_invocations_per_workgroup
+            );
+            println!("  per-pass timestamps: {}", if ctx.has_timestamps() { "yes" } else { "no" });
+            println!("backend in use: gpu (--backend auto and gpu); --backend cpu runs the CPU reference path");
+        }
+        Err(e) => {
+            println!("GPU chosen: none ({e})");
+            println!("backend in use: cpu (--backend auto falls back to the CPU; --backend gpu exits with code 2)");
+        }
+    }
     println!("rayon threads: {}", rayon::current_num_threads());
     println!("CPU features: {}", cpu_features());
     Ok(true)

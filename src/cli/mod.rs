@@ -4,7 +4,7 @@
 //! Exit codes: 0 when every file was done (or skipped), 1 when at least one
 //! input failed (the others are still processed), 2 when the run could not
 //! start at all (bad arguments or config, no inputs, an unwritable output
-//! directory, `--backend gpu` in a build without a GPU backend).
+//! directory, `--backend gpu` with no usable GPU adapter).
 
 mod detect;
 mod draw;
@@ -24,9 +24,6 @@ pub enum CliError {
     /// An error from the library (config, I/O).
     #[error(transparent)]
     Lib(#[from] crate::Error),
-    /// `--backend gpu` in a build without the GPU backend.
-    #[error("the GPU backend is not available in this build")]
-    GpuUnavailable,
     /// The output directory cannot be created or written to.
     #[error("output directory {path}: {reason}")]
     OutDir {
@@ -53,9 +50,9 @@ struct Cli {
 /// Where detection runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Backend {
-    /// The GPU when one is built in and found, else the CPU (this build: the CPU).
+    /// The GPU when an adapter opens, else the CPU (with a warning)
     Auto,
-    /// The GPU backend (not in this build: fails at once).
+    /// The GPU, or exit 2 when no adapter opens
     Gpu,
     /// The CPU reference path.
     Cpu,
@@ -81,10 +78,11 @@ struct Common {
     /// Local-threshold spread alpha, in hundredths
     #[arg(long)]
     alpha_pct: Option<u32>,
-    /// Backend: auto, gpu or cpu (this build has only the CPU backend)
+    /// Backend: auto (GPU if an adapter opens, else CPU), gpu or cpu
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     backend: Backend,
-    /// GPU adapter name (only with --backend gpu or auto)
+    /// GPU adapter: a case-insensitive part of its name (default: $WGPU_ADAPTER_NAME, else the
+    /// high-performance one); see `lfast info`
     #[arg(long, value_name = "NAME")]
     adapter: Option<String>,
     /// Worker threads (default: all cores)
@@ -103,8 +101,12 @@ enum Cmd {
     /// Write the improved Canny edge map of each input as a PNG
     #[command(after_help = edges::AFTER_HELP)]
     Edges(edges::EdgesArgs),
-    /// Backends, adapters and CPU features of this build
-    Info,
+    /// GPU adapters (the one chosen, its limits), the CPU fallback, CPU features
+    Info {
+        /// Choose the adapter as `--adapter` does for the other commands
+        #[arg(long, value_name = "NAME")]
+        adapter: Option<String>,
+    },
 }
 
 impl Common {
@@ -123,19 +125,28 @@ impl Common {
         Ok(cfg)
     }
 
-    /// Checks `--backend` and `--adapter`; returns the name of the backend used.
-    fn backend(&self) -> Result<&'static str, CliError> {
+    /// Checks `--backend` and `--adapter`; the backend and the adapter options.
+    fn backend(&self) -> Result<(crate::Backend, crate::gpu::GpuOptions), CliError> {
+        let opts = crate::gpu::GpuOptions { adapter_name: self.adapter.clone(), ..Default::default() };
         match (self.backend, &self.adapter) {
-            (Backend::Gpu, _) => Err(CliError::GpuUnavailable),
             (Backend::Cpu, Some(_)) => {
                 Err(CliError::Usage("--adapter needs --backend gpu or auto (--backend cpu has no adapters)".into()))
             }
-            (Backend::Auto, Some(name)) => {
-                eprintln!("lfast: note: --adapter {name} ignored: no GPU backend in this build, using the CPU");
-                Ok("cpu")
-            }
-            _ => Ok("cpu"),
+            (Backend::Cpu, None) => Ok((crate::Backend::Cpu, opts)),
+            (Backend::Gpu, _) => Ok((crate::Backend::Gpu, opts)),
+            (Backend::Auto, _) => Ok((crate::Backend::Auto, opts)),
         }
+    }
+
+    /// The L-FAST detector on the chosen backend; in auto mode a missing GPU
+    /// is a one-line note on stderr, not an error.
+    fn detector(&self, cfg: Config) -> Result<crate::Detector, CliError> {
+        let (backend, opts) = self.backend()?;
+        let det = crate::Detector::with_gpu_options(cfg, backend, &opts)?;
+        if backend == crate::Backend::Auto && det.backend_name() == "cpu" && !self.quiet {
+            eprintln!("lfast: note: no usable GPU adapter, running on the CPU (see `lfast info`)");
+        }
+        Ok(det)
     }
 
     /// A rayon pool with `--jobs` threads (all cores by default).
@@ -166,7 +177,7 @@ where
     let r = match cli.cmd {
         Cmd::Detect(a) => detect::run(a),
         Cmd::Edges(a) => edges::run(a),
-        Cmd::Info => info::run(),
+        Cmd::Info { adapter } => info::run(adapter),
     };
     match r {
         Ok(true) => ExitCode::SUCCESS,
