@@ -1,7 +1,8 @@
 //! SPEC 7 rule 3: hysteresis. Every STRONG pixel and every WEAK pixel joined to
 //! a STRONG one through 8-connected WEAK pixels becomes an edge (255).
-//! Mirrors shaders/hysteresis.wgsl, which iterates to a fixed point; here a
-//! single flood fill from the STRONG pixels reaches the same fixed point.
+//! Mirrors shaders/hysteresis.wgsl, which labels the 8-connected components of
+//! WEAK/STRONG pixels with a lock-free union-find and keeps the components that
+//! hold a STRONG pixel; here one flood fill from the STRONG pixels gives the same set.
 
 use super::classify::{EDGE, STRONG, WEAK};
 use crate::image::Plane;

@@ -1,0 +1,127 @@
+//! GPU timings on real frames: per-pass times from timestamp queries,
+//! single-frame latency (upload -> keypoints + descriptors in host memory),
+//! and sustained throughput with frames in flight through the staging ring.
+//!
+//! ```text
+//! cargo run --release --example gpu_bench -- ../shared/data/kitti/seq01_000000-000050/image_0 --frames 50
+//! ```
+//! Options: `--frames N` (default 30), `--ring R` (frames in flight, default 3),
+//! `--json FILE` (machine-readable results).
+
+use lfast::gpu::detector::{GpuDetector, GpuDetectorOptions, GpuInput, STAGES};
+use lfast::gpu::{GpuContext, GpuOptions};
+use lfast::{Config, Plane};
+use std::collections::VecDeque;
+use std::time::Instant;
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let mut inputs = Vec::new();
+    let (mut frames, mut ring, mut json) = (30usize, 3usize, None::<String>);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--frames" => frames = args.next().ok_or("--frames N")?.parse()?,
+            "--ring" => ring = args.next().ok_or("--ring R")?.parse()?,
+            "--json" => json = Some(args.next().ok_or("--json FILE")?),
+            _ => inputs.push(std::path::PathBuf::from(a)),
+        }
+    }
+    let mut paths = Vec::new();
+    for p in &inputs {
+        if p.is_dir() {
+            let mut v: Vec<_> = std::fs::read_dir(p)?.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == "png")).collect();
+            v.sort();
+            paths.extend(v);
+        } else {
+            paths.push(p.clone());
+        }
+    }
+    if paths.is_empty() {
+        return Err("give image files or a directory of PNGs".into());
+    }
+    let imgs: Vec<Plane<u8>> = paths.iter().take(frames.max(1)).map(lfast::image::load_gray).collect::<Result<_, _>>()?;
+    let (w, h) = (imgs[0].width, imgs[0].height);
+    if imgs.iter().any(|i| (i.width, i.height) != (w, h)) {
+        return Err("all frames must have the same size".into());
+    }
+    let ctx = GpuContext::new(&GpuOptions::default())?;
+    println!("adapter: {} ({:?}), {} frames of {w}x{h}, ring {ring}", ctx.info.name, ctx.info.backend, imgs.len());
+    let det = GpuDetector::with_options(ctx.clone(), Config::default(), GpuDetectorOptions { ring, profile: true })?;
+    let mut ws = Some(det.workspace(w, h)?);
+
+    // warm-up (pipeline compilation, first allocations)
+    for img in imgs.iter().take(3) {
+        det.detect_and_compute(&mut ws, img.view(), None)?;
+    }
+    // latency: one frame at a time, upload to host-side results
+    let mut lat = Vec::new();
+    let mut per_pass: Vec<Vec<f64>> = vec![Vec::new(); STAGES.len()];
+    let mut gpu_total = Vec::new();
+    let mut kps = 0usize;
+    for img in &imgs {
+        let t = Instant::now();
+        let f = det.detect_and_compute(&mut ws, img.view(), None)?;
+        lat.push(t.elapsed().as_secs_f64() * 1e3);
+        kps += f.keypoints.len();
+        for (i, (_, ms)) in f.pass_ms.iter().enumerate() {
+            per_pass[i].push(*ms);
+        }
+        gpu_total.push(f.pass_ms.iter().map(|p| p.1).sum::<f64>());
+    }
+    // throughput: `ring` frames in flight, each read back a frame or more later
+    let ws = ws.as_mut().ok_or("workspace")?;
+    let t = Instant::now();
+    let mut pending = VecDeque::new();
+    let mut done = 0usize;
+    for img in &imgs {
+        if pending.len() == ws.ring_len() {
+            det.finish_readback(ws, pending.pop_front().ok_or("ring")?)?;
+            done += 1;
+        }
+        ws.write_gray(&ctx.queue, img.view())?;
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        det.encode(&mut enc, GpuInput::Written, ws)?;
+        let tk = det.encode_readback(&mut enc, ws)?;
+        ctx.queue.submit([enc.finish()]);
+        det.start_readback(ws, tk)?;
+        pending.push_back(tk);
+    }
+    while let Some(tk) = pending.pop_front() {
+        det.finish_readback(ws, tk)?;
+        done += 1;
+    }
+    let secs = t.elapsed().as_secs_f64();
+
+    println!("\nper-pass GPU time (median over {} frames, timestamp queries):", imgs.len());
+    let mut rows = Vec::new();
+    for (i, name) in STAGES.iter().enumerate() {
+        let m = median(&mut per_pass[i]);
+        println!("  {name:<16} {m:9.3} ms");
+        rows.push(format!("\"{name}\": {m:.4}"));
+    }
+    let gpu = median(&mut gpu_total);
+    let l = median(&mut lat);
+    let fps = done as f64 / secs;
+    println!("  {:<16} {gpu:9.3} ms", "sum of passes");
+    println!("\nlatency upload -> keypoints + descriptors on the host: {l:.3} ms (median)");
+    println!("sustained, {} in flight: {fps:.1} frames/s ({:.3} ms per frame)", ws.ring_len(), 1e3 / fps);
+    println!("mean keypoints per frame: {:.1}", kps as f64 / imgs.len() as f64);
+    if let Some(p) = json {
+        let s = format!(
+            "{{\"adapter\": \"{}\", \"frames\": {}, \"width\": {w}, \"height\": {h}, \"latency_ms\": {l:.4}, \"fps\": {fps:.2}, \"gpu_sum_ms\": {gpu:.4}, \"passes_ms\": {{{}}}}}\n",
+            ctx.info.name,
+            imgs.len(),
+            rows.join(", ")
+        );
+        std::fs::write(p, s)?;
+    }
+    Ok(())
+}
