@@ -573,13 +573,510 @@ fn a_frame_in_flight_when_the_device_is_lost() {
     }
 }
 
+/// The adapter's limits with storage bindings and buffers of at most `bytes`.
+fn small_buffers(bytes: u64) -> wgpu::Limits {
+    wgpu::Limits { max_storage_buffer_binding_size: bytes, max_buffer_size: bytes, ..env_adapter().limits() }
+}
+
 #[test]
-fn probe_limits() {
-    let a = env_adapter();
-    eprintln!("{:#?}", a.limits());
-    for (name, l) in [("downlevel", wgpu::Limits::downlevel_defaults()), ("1MiB", wgpu::Limits { max_storage_buffer_binding_size: 1 << 20, max_buffer_size: 1 << 20, ..a.limits() })] {
-        let ctx = context_with_limits(l).unwrap();
-        let r = no_panic(|| GpuDetector::new(ctx.clone(), Config::default()).map(|_| ()));
-        eprintln!("{name}: {r:?}");
+fn frames_over_small_limits_are_gpu_limits_errors() {
+    let Some(_) = t::context() else { return };
+    let ctx = context_with_limits(small_buffers(1 << 20)).unwrap();
+    let cfg = Config::default();
+    let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
+    let cpu = CpuDetector::new(cfg.clone()).unwrap();
+    // 400x300: the 8-level atlas is ~371k pixels = 1.48 MB per buffer > 1 MiB
+    let big = t::test_image(400, 300, 6);
+    let e = gpu.workspace(400, 300).unwrap_err();
+    assert!(matches!(e, Error::GpuLimits { .. }), "workspace: {e:?}");
+    eprintln!("400x300 on 1 MiB buffers: {e}");
+    let mut ws = None;
+    let e = no_panic(|| gpu.detect_and_compute(&mut ws, big.view(), None)).unwrap().unwrap_err();
+    assert!(matches!(e, Error::GpuLimits { .. }), "detect_and_compute: {e:?}");
+    let e = no_panic(|| gpu.edge_image(&mut ws, big.view())).unwrap().unwrap_err();
+    assert!(matches!(e, Error::GpuLimits { .. }), "edge_image: {e:?}");
+    // a frame that fits still works, before and after a refused one
+    let small = t::test_image(200, 150, 6);
+    let g = gpu.detect_and_compute(&mut ws, small.view(), None).unwrap();
+    assert_same("200x150 on 1 MiB buffers", &g, &cpu.detect_and_compute(small.view(), None).unwrap());
+    let e = gpu.detect_and_compute(&mut ws, big.view(), None).unwrap_err();
+    assert!(matches!(e, Error::GpuLimits { .. }), "{e:?}");
+    let g = gpu.detect_and_compute(&mut ws, small.view(), None).unwrap();
+    assert_same("200x150 after a refused frame", &g, &cpu.detect_and_compute(small.view(), None).unwrap());
+    // the front door on this device reports it too (from_context = Backend::Gpu)
+    let det = Detector::from_context(ctx.clone(), cfg).unwrap();
+    let e = det.detect_and_compute(big.view(), None).unwrap_err();
+    assert!(matches!(e, Error::GpuLimits { .. }), "Detector: {e:?}");
+}
+
+#[test]
+fn frames_whose_readback_exceeds_max_buffer_size_are_gpu_limits_errors() {
+    // One level, no corner NMS: 150x150 has 136^2 = 18496 keypoint slots,
+    // 48 bytes each in `keypoints` (888 kB, fits 1 MiB) but 80 bytes each in
+    // a staging buffer of the readback ring (1.48 MB, does not).
+    let Some(_) = t::context() else { return };
+    let ctx = context_with_limits(small_buffers(1 << 20)).unwrap();
+    let cfg = Config { n_levels: 1, nms_radius: 0, border: 7, ..Config::default() };
+    let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
+    let img = t::test_image(150, 150, 8);
+    let r = no_panic(|| gpu.detect_and_compute(&mut None, img.view(), None));
+    match r {
+        Err(p) => panic!("panicked: {p}"),
+        Ok(Ok(g)) => assert_same("150x150", &g, &CpuDetector::new(cfg).unwrap().detect_and_compute(img.view(), None).unwrap()),
+        Ok(Err(e)) => assert!(matches!(e, Error::GpuLimits { .. }), "expected GpuLimits, got {e:?}"),
     }
+    // and through the workspace alone: a workspace is either usable or refused
+    match no_panic(|| gpu.workspace(150, 150)) {
+        Err(p) => panic!("panicked: {p}"),
+        Ok(Err(e)) => assert!(matches!(e, Error::GpuLimits { .. }), "{e:?}"),
+        Ok(Ok(mut ws)) => {
+            ws.write_gray(&ctx.queue, img.view()).unwrap();
+            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            gpu.encode(&mut enc, GpuInput::Written, &mut ws).unwrap();
+            let tk = gpu.encode_readback(&mut enc, &mut ws).unwrap();
+            ctx.queue.submit([enc.finish()]);
+            let err = pollster::block_on(scope.pop());
+            assert!(err.is_none(), "a workspace the library handed out fails validation: {}", err.unwrap());
+            gpu.start_readback(&mut ws, tk).unwrap();
+            gpu.finish_readback(&mut ws, tk).unwrap();
+        }
+    }
+}
+
+#[test]
+fn frames_over_the_workgroup_limit_are_gpu_limits_errors() {
+    let Some(_) = t::context() else { return };
+    let limits = wgpu::Limits { max_compute_workgroups_per_dimension: 64, ..env_adapter().limits() };
+    let ctx = context_with_limits(limits).unwrap();
+    let cfg = Config::default();
+    let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
+    // 1025 pixels wide = 65 workgroups of 16
+    let wide = t::test_image(1025, 40, 9);
+    let e = no_panic(|| gpu.detect_and_compute(&mut None, wide.view(), None)).unwrap().unwrap_err();
+    assert!(matches!(e, Error::GpuLimits { .. }), "{e:?}");
+    // 1024 wide fits
+    let ok = t::test_image(1024, 40, 9);
+    let g = gpu.detect_and_compute(&mut None, ok.view(), None).unwrap();
+    assert_same("1024x40, 64 workgroups", &g, &CpuDetector::new(cfg).unwrap().detect_and_compute(ok.view(), None).unwrap());
+}
+
+#[test]
+fn keypoint_dispatches_over_the_workgroup_limit_are_gpu_limits_errors() {
+    // The per-corner and per-keypoint passes are dispatched indirectly with
+    // ceil(n / 64) groups. With 64 groups per dimension, more than 4096
+    // corners cannot be dispatched: the frame must be refused (GpuLimits) or
+    // processed correctly, never silently truncated.
+    let Some(_) = t::context() else { return };
+    let limits = wgpu::Limits { max_compute_workgroups_per_dimension: 64, ..env_adapter().limits() };
+    let ctx = context_with_limits(limits).unwrap();
+    let cfg = Config { nms_radius: 0, border: 7, ..Config::default() };
+    let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
+    let img = load_gray(common::data("camera_cc0_v0.18plus.png")).unwrap(); // 512x512: 32 groups a side
+    let cpu = CpuDetector::new(cfg).unwrap().detect_and_compute(img.view(), None).unwrap();
+    assert!(cpu.0.len() > 64 * 64, "{} keypoints", cpu.0.len());
+    match no_panic(|| gpu.detect_and_compute(&mut None, img.view(), None)) {
+        Err(p) => panic!("panicked: {p}"),
+        Ok(Ok(g)) => assert_same("camera, 64 workgroups per dimension", &g, &cpu),
+        Ok(Err(e)) => assert!(matches!(e, Error::GpuLimits { .. }), "expected GpuLimits, got {e:?}"),
+    }
+}
+
+#[test]
+fn downlevel_limits_are_a_typed_error() {
+    // Too few storage buffers per stage for the pipelines: refused when the
+    // detector is built.
+    let Some(_) = t::context() else { return };
+    let ctx = context_with_limits(wgpu::Limits::downlevel_defaults()).unwrap();
+    let e = no_panic(|| GpuDetector::new(ctx.clone(), Config::default())).unwrap().unwrap_err();
+    assert!(matches!(e, Error::Gpu { .. } | Error::GpuLimits { .. } | Error::Unsupported { .. }), "{e:?}");
+    eprintln!("downlevel_defaults: {e}");
+    let e = Detector::from_context(ctx, Config::default()).unwrap_err();
+    assert!(matches!(e, Error::Gpu { .. } | Error::GpuLimits { .. } | Error::Unsupported { .. }), "{e:?}");
+}
+
+#[test]
+fn auto_runs_a_frame_over_the_device_limits_on_the_cpu() {
+    // Without corner NMS and with the smallest border there is a keypoint
+    // slot per pixel (48 bytes): the smallest square frame whose slots exceed
+    // the device's storage binding limit is refused by the GPU path; Auto
+    // runs it on the CPU and keeps the GPU for the next frames.
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config { nms_radius: 0, border: 7, ..Config::default() };
+    let limit = ctx.device.limits().max_storage_buffer_binding_size.min(ctx.device.limits().max_buffer_size);
+    let over = |s: u32| {
+        let l = lfast::gpu::FrameLayout::new(&cfg, s, s);
+        l.capacity as u64 * 48 > limit || l.total_px as u64 * 4 > limit
+    };
+    let Some(side) = (64..=2048u32).step_by(32).find(|&s| over(s)) else {
+        eprintln!("NOT RUN: storage bindings of {limit} bytes hold every frame up to 2048x2048 on this device");
+        return;
+    };
+    eprintln!("the smallest square frame over {limit} bytes: {side}x{side}");
+    let big = t::test_image(side, side, 10);
+    let small = t::test_image(120, 90, 10);
+    let cpu = CpuDetector::new(cfg.clone()).unwrap();
+    let gpu_only = Detector::new(cfg.clone(), Backend::Gpu).unwrap();
+    let e = gpu_only.detect_and_compute(big.view(), None).unwrap_err();
+    assert!(matches!(e, Error::GpuLimits { .. }), "Backend::Gpu: {e:?}");
+    let auto = Detector::new(cfg.clone(), Backend::Auto).unwrap();
+    assert_eq!(auto.backend_name(), "gpu");
+    assert_eq!(auto.detect_and_compute(small.view(), None).unwrap(), cpu.detect_and_compute(small.view(), None).unwrap());
+    assert_eq!(auto.detect_and_compute(big.view(), None).unwrap(), cpu.detect_and_compute(big.view(), None).unwrap());
+    assert_eq!(auto.backend_name(), "gpu", "a frame over the limits must not switch later frames to the CPU");
+    assert_eq!(auto.detect_and_compute(small.view(), None).unwrap(), cpu.detect_and_compute(small.view(), None).unwrap());
+}
+
+#[test]
+fn no_adapter_is_a_typed_error_and_auto_falls_back_to_the_cpu() {
+    let Some(_) = t::context() else { return };
+    let opts = GpuOptions { adapter_name: Some("no-such-adapter".into()), ..Default::default() };
+    let e = GpuContext::new(&opts).unwrap_err();
+    assert!(matches!(e, Error::NoAdapter { .. }), "{e:?}");
+    assert!(e.to_string().contains("no-such-adapter"), "the error names the adapter asked for: {e}");
+    eprintln!("{e}");
+    let cfg = Config::default();
+    let e = Detector::with_gpu_options(cfg.clone(), Backend::Gpu, &opts).unwrap_err();
+    assert!(matches!(e, Error::NoAdapter { .. }), "Backend::Gpu: {e:?}");
+    let auto = Detector::with_gpu_options(cfg.clone(), Backend::Auto, &opts).unwrap();
+    assert_eq!(auto.backend_name(), "cpu");
+    assert_eq!(auto.adapter_name(), None);
+    let cpu = CpuDetector::new(cfg).unwrap();
+    let img = load_gray(common::data("astronaut_256.png")).unwrap();
+    assert_eq!(auto.detect_and_compute(img.view(), None).unwrap(), cpu.detect_and_compute(img.view(), None).unwrap());
+    assert_eq!(auto.edge_image(img.view()).unwrap().data, cpu.edge_image(img.view()).unwrap().data);
+}
+
+#[test]
+fn unsupported_configs_are_typed_errors_and_auto_runs_them_on_the_cpu() {
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config { distribution: true, n_features: 150, ..Config::default() };
+    let e = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap_err();
+    assert!(matches!(e, Error::Unsupported { .. }), "{e:?}");
+    let e = Detector::from_context(ctx.clone(), cfg.clone()).unwrap_err();
+    assert!(matches!(e, Error::Unsupported { .. }), "from_context: {e:?}");
+    let e = Detector::new(cfg.clone(), Backend::Gpu).unwrap_err();
+    assert!(matches!(e, Error::Unsupported { .. }), "Backend::Gpu: {e:?}");
+    let auto = Detector::new(cfg.clone(), Backend::Auto).unwrap();
+    assert_eq!(auto.backend_name(), "cpu");
+    let img = load_gray(common::data("astronaut_256.png")).unwrap();
+    let got = auto.detect_and_compute(img.view(), None).unwrap();
+    assert_eq!(got, CpuDetector::new(cfg).unwrap().detect_and_compute(img.view(), None).unwrap());
+    assert!(!got.0.is_empty() && got.0.len() <= 150);
+    // an invalid config is InvalidConfig on every backend, Auto included
+    let bad = Config { n_levels: 0, ..Config::default() };
+    assert!(matches!(GpuDetector::new(ctx.clone(), bad.clone()).unwrap_err(), Error::InvalidConfig { .. }));
+    assert!(matches!(Detector::new(bad.clone(), Backend::Auto).unwrap_err(), Error::InvalidConfig { .. }));
+    // a readback ring of 0 slots
+    let e = GpuDetector::with_options(ctx, Config::default(), GpuDetectorOptions { ring: 0, profile: false }).unwrap_err();
+    assert!(matches!(e, Error::InvalidConfig { .. }), "{e:?}");
+}
+
+// ---------------------------------------------------------------------------
+// bad inputs to the embedding API
+
+#[test]
+fn wrong_sizes_are_typed_errors() {
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config::default();
+    let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
+    let cpu = CpuDetector::new(cfg.clone()).unwrap();
+    let mut ws = gpu.workspace(64, 48).unwrap();
+    for (w, h) in [(65, 48), (64, 47), (48, 64), (1, 1)] {
+        let e = ws.write_gray(&ctx.queue, Plane::<u8>::new(w, h).view()).unwrap_err();
+        assert!(matches!(e, Error::InvalidImage { .. }), "gray {w}x{h}: {e:?}");
+        let e = gpu.set_mask(&mut ws, Some(Plane::<u8>::new(w, h).view())).unwrap_err();
+        assert!(matches!(e, Error::MaskSize { .. }), "mask {w}x{h}: {e:?}");
+    }
+    // the blocking API: a mask of another size than the image
+    let img = t::test_image(64, 48, 12);
+    let mut ows = None;
+    let e = gpu.detect_and_compute(&mut ows, img.view(), Some(Plane::<u8>::new(63, 48).view())).unwrap_err();
+    assert!(matches!(e, Error::MaskSize { .. }), "{e:?}");
+    // an empty image and one over MAX_SIDE
+    for (w, h) in [(0, 10), (10, 0), (lfast::image::MAX_SIDE + 1, 1)] {
+        let e = gpu.workspace(w, h).unwrap_err();
+        assert!(matches!(e, Error::InvalidImage { .. }), "workspace {w}x{h}: {e:?}");
+    }
+    let e = gpu.detect_and_compute(&mut ows, Plane::<u8>::new(0, 5).view(), None).unwrap_err();
+    assert!(matches!(e, Error::InvalidImage { .. }), "{e:?}");
+    // the workspace still works after the refusals, and the front door reports the same
+    assert_same("after refusals", &gpu.detect_and_compute(&mut ows, img.view(), None).unwrap(), &cpu.detect_and_compute(img.view(), None).unwrap());
+    let det = Detector::from_context(ctx.clone(), cfg.clone()).unwrap();
+    let e = det.detect_and_compute(img.view(), Some(Plane::<u8>::new(63, 48).view())).unwrap_err();
+    assert!(matches!(e, Error::MaskSize { .. }), "{e:?}");
+    let auto = Detector::new(cfg, Backend::Auto).unwrap();
+    let e = auto.detect_and_compute(img.view(), Some(Plane::<u8>::new(63, 48).view())).unwrap_err();
+    assert!(matches!(e, Error::MaskSize { .. }), "Auto: {e:?}");
+    assert_eq!(auto.backend_name(), "gpu", "bad input must not switch Auto to the CPU");
+}
+
+#[test]
+fn readback_tickets_are_checked() {
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config::default();
+    let gpu = GpuDetector::with_options(ctx.clone(), cfg.clone(), GpuDetectorOptions { ring: 2, profile: false }).unwrap();
+    let cpu = CpuDetector::new(cfg).unwrap();
+    let img = t::test_image(80, 60, 13);
+    let expected = cpu.detect_and_compute(img.view(), None).unwrap();
+    let mut ws = gpu.workspace(80, 60).unwrap();
+    ws.write_gray(&ctx.queue, img.view()).unwrap();
+
+    // more readbacks than the ring holds
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    gpu.encode(&mut enc, GpuInput::Written, &mut ws).unwrap();
+    let t1 = gpu.encode_readback(&mut enc, &mut ws).unwrap();
+    let t2 = gpu.encode_readback(&mut enc, &mut ws).unwrap();
+    assert_ne!(t1, t2);
+    let e = gpu.encode_readback(&mut enc, &mut ws).unwrap_err();
+    assert!(matches!(e, Error::Gpu { .. }), "a third readback on a ring of 2: {e:?}");
+    // redeeming before starting
+    assert!(gpu.try_finish_readback(&mut ws, t1).is_err());
+    assert!(gpu.finish_readback(&mut ws, t1).is_err(), "finish_readback before start_readback must not wait forever");
+    ctx.queue.submit([enc.finish()]);
+    gpu.start_readback(&mut ws, t1).unwrap();
+    // starting twice
+    assert!(matches!(gpu.start_readback(&mut ws, t1).unwrap_err(), Error::Gpu { .. }));
+    gpu.start_readback(&mut ws, t2).unwrap();
+    assert_same("t1", &gpu.finish_readback(&mut ws, t1).unwrap(), &expected);
+    // redeeming twice
+    let e = gpu.finish_readback(&mut ws, t1).unwrap_err();
+    assert!(matches!(e, Error::Gpu { .. }), "t1 redeemed twice: {e:?}");
+    assert!(gpu.try_finish_readback(&mut ws, t1).is_err());
+    assert!(gpu.start_readback(&mut ws, t1).is_err(), "t1 restarted after it was redeemed");
+    assert_same("t2", &gpu.finish_readback(&mut ws, t2).unwrap(), &expected);
+    assert!(gpu.finish_readback(&mut ws, t2).is_err());
+    // a ticket of another workspace with a shorter ring
+    let mut other = GpuDetector::with_options(ctx.clone(), Config::default(), GpuDetectorOptions { ring: 1, profile: false })
+        .unwrap()
+        .workspace(80, 60)
+        .unwrap();
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    gpu.encode(&mut enc, GpuInput::Written, &mut ws).unwrap();
+    let t3 = gpu.encode_readback(&mut enc, &mut ws).unwrap();
+    let t4 = gpu.encode_readback(&mut enc, &mut ws).unwrap();
+    let unknown = if t3 == t1 { t4 } else { t3 }; // slot 1: not in a ring of one
+    assert!(gpu.start_readback(&mut other, unknown).is_err());
+    assert!(gpu.try_finish_readback(&mut other, unknown).is_err());
+    ctx.queue.submit([enc.finish()]);
+    // the ring is usable again once both are redeemed
+    for tk in [t3, t4] {
+        gpu.start_readback(&mut ws, tk).unwrap();
+    }
+    for tk in [t4, t3] {
+        assert_same("second round", &gpu.finish_readback(&mut ws, tk).unwrap(), &expected);
+    }
+}
+
+#[test]
+fn a_stale_ticket_does_not_redeem_another_frame() {
+    // With a ring of one, every frame's ticket is the same slot: a ticket kept
+    // from frame A must not hand out frame B.
+    let Some(ctx) = t::context() else { return };
+    let gpu = GpuDetector::with_options(ctx.clone(), Config::default(), GpuDetectorOptions { ring: 1, profile: false }).unwrap();
+    let mut ws = gpu.workspace(80, 60).unwrap();
+    let run = |ws: &mut GpuWorkspace, img: &Plane<u8>| {
+        ws.write_gray(&ctx.queue, img.view()).unwrap();
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        gpu.encode(&mut enc, GpuInput::Written, ws).unwrap();
+        let tk = gpu.encode_readback(&mut enc, ws).unwrap();
+        ctx.queue.submit([enc.finish()]);
+        gpu.start_readback(ws, tk).unwrap();
+        tk
+    };
+    let ta = run(&mut ws, &t::test_image(80, 60, 14));
+    let a = gpu.finish_readback(&mut ws, ta).unwrap();
+    let tb = run(&mut ws, &t::test_image(80, 60, 15));
+    assert_eq!(ta, tb, "a ring of one has one slot");
+    // frame A's ticket, kept and redeemed again after frame B was recorded
+    let stale = gpu.finish_readback(&mut ws, ta);
+    if let Ok(f) = &stale {
+        let b_own = gpu.finish_readback(&mut ws, tb);
+        panic!(
+            "frame A's ticket, used a second time, redeemed frame B ({} keypoints; frame A had {}); \
+             frame B's own ticket then gives {:?}",
+            f.keypoints.len(),
+            a.keypoints.len(),
+            b_own.map(|f| f.keypoints.len())
+        );
+    }
+    assert_eq!(gpu.finish_readback(&mut ws, tb).unwrap().keypoints.len(), 10);
+}
+
+#[test]
+fn bad_gpu_inputs_are_typed_errors() {
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config::default();
+    let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
+    let (w, h) = (64u32, 48u32);
+    let mut ws = gpu.workspace(w, h).unwrap();
+    // a gray buffer too small
+    let short = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: (w * h) as u64 - 4,
+        usage: wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    let e = gpu.encode(&mut enc, GpuInput::GrayBuffer(&short), &mut ws).unwrap_err();
+    assert!(matches!(e, Error::InvalidImage { .. }), "short gray buffer: {e:?}");
+    // textures: wrong size, unsupported format, format not the texture's, no TEXTURE_BINDING
+    let tex = |tw: u32, th: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
+        ctx.device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: None,
+                size: wgpu::Extent3d { width: tw, height: th, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+            .create_view(&Default::default())
+    };
+    use wgpu::TextureFormat as F;
+    let bind = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+    let cases: Vec<(&str, wgpu::TextureView, F, fn(&Error) -> bool)> = vec![
+        ("wrong size", tex(w + 1, h, F::Rgba8Unorm, bind), F::Rgba8Unorm, |e| matches!(e, Error::InvalidImage { .. })),
+        ("wrong size, smaller", tex(w, h - 1, F::R8Unorm, bind), F::R8Unorm, |e| matches!(e, Error::InvalidImage { .. })),
+        ("Rgba16Float", tex(w, h, F::Rgba16Float, bind), F::Rgba16Float, |e| matches!(e, Error::Unsupported { .. })),
+        ("Rgba8UnormSrgb", tex(w, h, F::Rgba8UnormSrgb, bind), F::Rgba8UnormSrgb, |e| matches!(e, Error::Unsupported { .. })),
+        ("no TEXTURE_BINDING", tex(w, h, F::Rgba8Unorm, wgpu::TextureUsages::COPY_DST), F::Rgba8Unorm, |_| true),
+        // the format named is not the texture's
+        ("R32Float named Rgba8Unorm", tex(w, h, F::R32Float, bind), F::Rgba8Unorm, |_| true),
+        ("Rgba16Float named Rgba8Unorm", tex(w, h, F::Rgba16Float, bind), F::Rgba8Unorm, |_| true),
+        ("Rgba8Unorm named R8Unorm", tex(w, h, F::Rgba8Unorm, bind), F::R8Unorm, |_| true),
+    ];
+    let mut failures = Vec::new();
+    for (what, view, format, ok) in &cases {
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let r = no_panic(|| gpu.encode(&mut enc, GpuInput::Texture(view, *format), &mut ws));
+        drop(enc);
+        let leaked = pollster::block_on(scope.pop());
+        match r {
+            Err(p) => failures.push(format!("{what}: PANICKED: {p}")),
+            Ok(Ok(())) => failures.push(format!(
+                "{what}: encode returned Ok{}",
+                leaked.map(|e| format!(" (and raised a wgpu validation error: {e})")).unwrap_or_default()
+            )),
+            Ok(Err(e)) if !ok(&e) => failures.push(format!("{what}: unexpected error {e:?}")),
+            Ok(Err(e)) => {
+                if let Some(v) = leaked {
+                    failures.push(format!("{what}: {e:?}, but also raised a wgpu validation error: {v}"));
+                } else {
+                    eprintln!("{what}: {e}");
+                }
+            }
+        }
+    }
+    // after all that the workspace still works
+    let img = t::test_image(w, h, 16);
+    let g = gpu.detect_and_compute(&mut Some(ws), img.view(), None).unwrap();
+    assert_same("after bad inputs", &g, &CpuDetector::new(cfg).unwrap().detect_and_compute(img.view(), None).unwrap());
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+#[test]
+fn an_atlas_over_four_giga_pixels_is_refused() {
+    // 32 levels at scale 1.0001 of a 16384x8200 frame: 4.2991e9 pixels in
+    // the atlas, more than a u32 index reaches. The border leaves few
+    // keypoint slots, so only the pixel count is over.
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config { n_levels: 32, scale_factor: 1.0001, border: 1024, nms_radius: 32, ..Config::default() };
+    let (w, h) = (16384, 8200);
+    let true_total: u64 = cfg.level_sizes(w, h).iter().map(|&(a, b)| a as u64 * b as u64).sum();
+    assert!(true_total > u32::MAX as u64, "{true_total}");
+    let layout = lfast::gpu::FrameLayout::new(&cfg, w, h);
+    let gpu = GpuDetector::new(ctx, cfg).unwrap();
+    let r = no_panic(|| gpu.workspace(w, h).map(|_| ()));
+    assert!(
+        matches!(r, Ok(Err(Error::GpuLimits { .. }))),
+        "a {w}x{h} frame with {true_total} atlas pixels (FrameLayout::total_px says {}): {r:?}",
+        layout.total_px
+    );
+}
+
+// ---------------------------------------------------------------------------
+// 4. workspace reuse across shrinking and growing sizes
+
+#[test]
+fn workspace_reuse_across_shrinking_and_growing_sizes() {
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config { n_levels: 5, ..Config::default() };
+    let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
+    let cpu = CpuDetector::new(cfg.clone()).unwrap();
+    let mut ws: Option<GpuWorkspace> = None;
+    // (w, h, whether the buffers must be the ones of the previous frame)
+    let steps: [(u32, u32, bool); 10] = [
+        (240, 180, false),
+        (160, 120, true),  // shrink: relaid out in place
+        (37, 29, true),    // shrink more
+        (1, 1, true),      // the smallest
+        (240, 180, true),  // back to the allocated size: still fits
+        (180, 240, false), // same pixels, other shape: the grids differ, may reallocate
+        (17, 33, true),
+        (241, 181, false), // grew
+        (100, 100, true),
+        (241, 181, true),
+    ];
+    let mut prev: Option<(wgpu::Buffer, u64)> = None;
+    for (i, &(w, h, reuse)) in steps.iter().enumerate() {
+        let content = if i % 2 == 0 { Content::Structured(i as u32) } else { Content::Blocks(i as u32) };
+        let img = render(&content, w, h);
+        gpu.prepare_workspace(&mut ws, w, h).unwrap();
+        let b = &ws.as_ref().unwrap().buffers;
+        assert_eq!(b.size(), (w, h));
+        let now = (b.gray.clone(), b.gray.size());
+        if let Some((buf, size)) = &prev {
+            if reuse {
+                assert!(now.0 == *buf && now.1 == *size, "step {i} ({w}x{h}): the buffers should have been reused");
+            } else {
+                eprintln!("step {i} ({w}x{h}): gray buffer {} bytes, reused: {}", now.1, now.0 == *buf);
+            }
+        }
+        prev = Some(now);
+        let g = gpu.detect_and_compute(&mut ws, img.view(), None).unwrap();
+        let c = cpu.detect_and_compute(img.view(), None).unwrap();
+        assert_same(&format!("step {i}: {w}x{h}"), &g, &c);
+        let e = gpu.edge_image(&mut ws, img.view()).unwrap();
+        assert_eq!(e.data, cpu.edge_image(img.view()).unwrap().data, "step {i}: edges of {w}x{h}");
+        // a fresh workspace gives the same bits: nothing left over from larger frames
+        let f = gpu.detect_and_compute(&mut None, img.view(), None).unwrap();
+        identical(&format!("step {i}: {w}x{h} reused vs fresh"), &f, &g).unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+#[test]
+fn a_mask_does_not_outlive_its_frame_size() {
+    // set_mask at one size, then prepare_workspace to another: the old mask
+    // (laid out for the old size) must not apply to the new frames, whether
+    // the buffers were reused (shrink) or reallocated (grow).
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config::default();
+    let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
+    let cpu = CpuDetector::new(cfg).unwrap();
+    let mut failures = Vec::new();
+    for (from, to) in [((256u32, 256u32), (200u32, 160u32)), ((200, 160), (256, 256))] {
+        let mut ws = None;
+        gpu.prepare_workspace(&mut ws, from.0, from.1).unwrap();
+        let off = Plane::<u8>::new(from.0, from.1); // all off: no keypoint anywhere
+        gpu.set_mask(ws.as_mut().unwrap(), Some(off.view())).unwrap();
+        gpu.prepare_workspace(&mut ws, to.0, to.1).unwrap();
+        let w = ws.as_mut().unwrap();
+        let img = t::test_image(to.0, to.1, 17);
+        w.write_gray(&ctx.queue, img.view()).unwrap();
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        gpu.encode(&mut enc, GpuInput::Written, w).unwrap();
+        let tk = gpu.encode_readback(&mut enc, w).unwrap();
+        ctx.queue.submit([enc.finish()]);
+        gpu.start_readback(w, tk).unwrap();
+        let g = gpu.finish_readback(w, tk).unwrap();
+        let c = cpu.detect_and_compute(img.view(), None).unwrap();
+        if let Err(e) = same(&format!("mask set at {from:?}, frame at {to:?}"), &g, &c) {
+            failures.push(e);
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
 }
