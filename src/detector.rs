@@ -101,6 +101,15 @@ impl Detector {
         Ok(Self { cpu, gpu: Some(Gpu { det, ws: Mutex::new(None) }), auto: false, fell_back: Default::default() })
     }
 
+    /// A detector on an embedder's device that, like [`Backend::Auto`], runs a
+    /// frame on the CPU (with a logged warning) when the GPU fails on it, and
+    /// stays on the CPU after a device loss.
+    pub fn from_context_with_fallback(ctx: GpuContext, cfg: Config) -> Result<Self> {
+        let mut d = Self::from_context(ctx, cfg)?;
+        d.auto = true;
+        Ok(d)
+    }
+
     /// `"gpu"` or `"cpu"`: what the next frame runs on.
     pub fn backend_name(&self) -> &'static str {
         if self.active_gpu().is_some() { "gpu" } else { "cpu" }

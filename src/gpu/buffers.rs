@@ -2,13 +2,13 @@
 //! [`Buffers::new`] and reused for every frame of that size.
 
 use super::kernel::DYNAMIC_STRIDE;
-use super::layout::{FrameLayout, MAX_LEVELS};
+use super::kernel::init_buffer;
+use super::layout::{FrameLayout, MAX_LEVELS, MAX_WINDOWS_PER_AXIS};
 use crate::config::Config;
 use crate::cpu::orb::{Pattern, RotatedPatterns};
 use crate::cpu::orientation::AngleBins;
 use crate::error::{Error, Result};
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 /// One keypoint as the GPU stores it (48 bytes; `shaders/select.wgsl`'s `Kp`).
 /// `x, y, size` are in input-image pixels, ready to draw; `px, py, level`
@@ -93,11 +93,16 @@ pub struct Allocated {
 impl Allocated {
     fn of(layout: &FrameLayout) -> Self {
         let (w, h) = layout.sizes[0];
+        let levels = layout.n_levels() as u64;
+        // Windows and grid sized for the most windows any level can have, so a
+        // smaller frame (which may have more, smaller windows) still fits.
+        let per_level = (MAX_WINDOWS_PER_AXIS * MAX_WINDOWS_PER_AXIS) as u64;
+        let sides: u64 = layout.sizes.iter().map(|&(w, h)| w as u64 + h as u64).sum();
         Self {
-            px: layout.total_px as u64,
+            px: layout.total_px_exact,
             keypoints: layout.capacity as u64,
-            windows: layout.total_windows as u64,
-            grid: layout.grid_data.len() as u64,
+            windows: levels * per_level,
+            grid: sides + levels * 2 * MAX_WINDOWS_PER_AXIS as u64,
             input: (w as u64 * h as u64).next_multiple_of(4),
             levels: layout.n_levels() as u64,
         }
@@ -194,7 +199,17 @@ impl Buffers {
     /// naming the limit, when a buffer would exceed the device's limits.
     pub fn new(device: &wgpu::Device, cfg: &Config, width: u32, height: u32) -> Result<Self> {
         let layout = FrameLayout::new(cfg, width, height);
+        let allocated = Allocated::of(&layout);
         let limits = device.limits();
+        if layout.total_px_exact > u32::MAX as u64 {
+            return Err(Error::GpuLimits {
+                reason: format!(
+                    "a {width}x{height} frame's {} levels hold {} pixels, more than the 2^32 a GPU atlas addresses",
+                    layout.n_levels(),
+                    layout.total_px_exact
+                ),
+            });
+        }
         let px_bytes = layout.total_px as u64 * 4;
         let kp_bytes = layout.capacity as u64 * KP_WORDS * 4;
         let largest = px_bytes.max(kp_bytes);
@@ -209,9 +224,14 @@ impl Buffers {
         }
         let [gx, gy, gz] = layout.pixel_groups();
         let lim = limits.max_compute_workgroups_per_dimension;
-        if gx > lim || gy > lim || gz > lim {
+        // keypoint passes are dispatched indirectly with ceil(count / 64) groups
+        let gk = layout.capacity.div_ceil(64);
+        if gx > lim || gy > lim || gz > lim || gk > lim {
             return Err(Error::GpuLimits {
-                reason: format!("a {width}x{height} frame needs {gx}x{gy}x{gz} workgroups, the device allows {lim} per dimension"),
+                reason: format!(
+                    "a {width}x{height} frame needs {gx}x{gy}x{gz} workgroups per pass and up to {gk} per keypoint pass, \
+                     the device allows {lim} per dimension"
+                ),
             });
         }
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
@@ -223,9 +243,7 @@ impl Buffers {
                 mapped_at_creation: false,
             })
         };
-        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
-        };
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| init_buffer(device, label, contents, usage);
         let px = |label: &str| buf(label, px_bytes);
         let n_levels = layout.n_levels() as u64;
         let mut level_index = vec![0u8; MAX_LEVELS * DYNAMIC_STRIDE as usize];
@@ -233,7 +251,7 @@ impl Buffers {
             level_index[l * DYNAMIC_STRIDE as usize..][..4].copy_from_slice(&(l as u32).to_le_bytes());
         }
         let mut grid = layout.grid_data.clone();
-        grid.resize(grid.len().max(4), 0);
+        grid.resize((allocated.grid as usize).max(grid.len()).max(4), 0);
         let cap = layout.capacity as u64;
         let patterns = pattern_words(cfg);
         let angle_bounds: Vec<i32> =
@@ -259,7 +277,7 @@ impl Buffers {
             hist: buf("hist", 256 * 4 * n_levels),
             otsu: buf("otsu", 4 * n_levels),
             grid: init("grid", bytemuck::cast_slice(&grid), storage),
-            windows: buf("windows", 16 * layout.total_windows as u64),
+            windows: buf("windows", 16 * allocated.windows),
             classes: px("classes"),
             ruled: px("ruled"),
             labels: px("labels"),
@@ -281,7 +299,7 @@ impl Buffers {
             blur_tmp: px("blur_tmp"),
             patterns: init("patterns", bytemuck::cast_slice(&patterns), storage),
             angle_bounds: init("angle_bounds", bytemuck::cast_slice(&angle_bounds), storage),
-            allocated: Allocated::of(&layout),
+            allocated,
             layout,
         };
         Ok(this)
@@ -295,14 +313,13 @@ impl Buffers {
         if !self.allocated.holds(&Allocated::of(&layout)) {
             return false;
         }
-        let mut p = layout.params;
-        p.use_mask = self.layout.params.use_mask;
+        // A mask belongs to its frame size: the new size starts without one.
+        let p = layout.params;
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         if !layout.grid_data.is_empty() {
             queue.write_buffer(&self.grid, 0, bytemuck::cast_slice(&layout.grid_data));
         }
         self.layout = layout;
-        self.layout.params = p;
         true
     }
 

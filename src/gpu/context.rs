@@ -105,7 +105,15 @@ impl GpuContext {
         Self { device, queue, info, lost }
     }
 
-    /// `Err(DeviceLost)` once the device has been lost.
+    /// [`check_lost`](Self::check_lost) after a non-blocking poll, which runs
+    /// a pending device-lost callback (for the blocking entry points only:
+    /// the embedding API never polls).
+    pub fn check_lost_polled(&self) -> Result<()> {
+        let _ = self.device.poll(wgpu::PollType::Poll);
+        self.check_lost()
+    }
+
+    /// `Err(DeviceLost)` once the device has been lost (as far as the callback has told).
     pub fn check_lost(&self) -> Result<()> {
         match self.lost.lock().ok().and_then(|g| g.clone()) {
             Some(reason) => Err(Error::DeviceLost { reason }),
@@ -159,9 +167,11 @@ pub(crate) fn map_blocking(ctx: &GpuContext, staging: &wgpu::Buffer, len: u64) -
         let _ = tx.send(r);
     });
     ctx.wait()?;
-    rx.recv()
-        .map_err(|_| Error::Gpu { reason: "map_async callback never ran".into() })?
-        .map_err(|e| Error::Gpu { reason: format!("map_async: {e}") })?;
+    let r = rx.recv().map_err(|_| Error::Gpu { reason: "map_async callback never ran".into() })?;
+    if let Err(e) = r {
+        ctx.check_lost_polled()?;
+        return Err(Error::Gpu { reason: format!("map_async: {e}") });
+    }
     let out = slice.get_mapped_range().map_err(|e| Error::Gpu { reason: format!("mapped range: {e:?}") })?.to_vec();
     staging.unmap();
     Ok(out)

@@ -182,12 +182,17 @@ struct Slot {
     mapped: std::sync::Arc<std::sync::Mutex<Option<std::result::Result<(), wgpu::BufferAsyncError>>>>,
     /// Keypoint slots copied into this staging buffer.
     copied: u64,
+    /// Frames recorded into this slot so far: a ticket names slot and generation.
+    generation: u64,
 }
 
 /// A frame recorded into a staging slot; redeem it with
 /// [`GpuDetector::start_readback`] after submitting, then `try_finish` / `finish_readback`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Ticket(usize);
+pub struct Ticket {
+    slot: usize,
+    generation: u64,
+}
 
 /// The GPU side of one frame size: buffers, bind groups, the staging ring.
 pub struct GpuWorkspace {
@@ -300,7 +305,18 @@ impl GpuDetector {
         if opts.ring == 0 {
             return Err(Error::InvalidConfig { field: "ring", reason: "must be at least 1".into() });
         }
-        ctx.check_lost()?;
+        ctx.check_lost_polled()?;
+        let need = super::SHADERS
+            .iter()
+            .map(|s| s.bindings.iter().filter(|b| matches!(b.slot, super::kernel::Slot::Read | super::kernel::Slot::ReadWrite)).count())
+            .max()
+            .unwrap_or(0) as u32;
+        let have = ctx.device.limits().max_storage_buffers_per_shader_stage;
+        if have < need {
+            return Err(Error::GpuLimits {
+                reason: format!("the passes bind up to {need} storage buffers, {} allows {have}", ctx.info.name),
+            });
+        }
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let passes = Passes::new(&ctx.device);
         if let Some(e) = pollster::block_on(scope.pop()) {
@@ -323,13 +339,23 @@ impl GpuDetector {
     /// A workspace for `width x height` frames.
     pub fn workspace(&self, width: u32, height: u32) -> Result<GpuWorkspace> {
         crate::image::check_size(width, height)?;
-        self.ctx.check_lost()?;
+        self.ctx.check_lost_polled()?;
         let d = &self.ctx.device;
         let oom = d.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let val = d.push_error_scope(wgpu::ErrorFilter::Validation);
         let built = Buffers::new(d, &self.cfg, width, height).and_then(|buffers| {
+            let staging = self.staging_size(&buffers);
+            if staging > d.limits().max_buffer_size {
+                return Err(Error::GpuLimits {
+                    reason: format!(
+                        "a {width}x{height} frame needs readback buffers of {staging} bytes, the device allows {}",
+                        d.limits().max_buffer_size
+                    ),
+                });
+            }
             let bound = self.passes.bind(d, &buffers)?;
-            Ok((buffers, bound))
+            let ring: Vec<Slot> = (0..self.opts.ring).map(|_| self.slot(&buffers)).collect();
+            Ok((buffers, bound, ring))
         });
         let val_err = pollster::block_on(val.pop());
         let oom_err = pollster::block_on(oom.pop());
@@ -339,8 +365,7 @@ impl GpuDetector {
         if let Some(e) = val_err {
             return Err(Error::Gpu { reason: format!("workspace for {width}x{height}: {e}") });
         }
-        let (buffers, bound) = built?;
-        let ring = (0..self.opts.ring).map(|_| self.slot(&buffers)).collect();
+        let (buffers, bound, ring) = built?;
         let timestamps = (self.opts.profile && self.ctx.has_timestamps()).then(|| {
             let n = 2 * STAGES.len() as u32;
             Timestamps {
@@ -401,6 +426,7 @@ impl GpuDetector {
             state: SlotState::Free,
             mapped: Default::default(),
             copied: 0,
+            generation: 0,
         }
     }
 
@@ -461,6 +487,15 @@ impl GpuDetector {
         self.ctx.check_lost()?;
         let p = &self.passes;
         if let GpuInput::Texture(view, format) = input {
+            let actual = view.texture().format();
+            if actual.remove_srgb_suffix() != format.remove_srgb_suffix() {
+                let (w, h) = ws.buffers.size();
+                return Err(Error::InvalidImage {
+                    width: w,
+                    height: h,
+                    reason: format!("the texture is {actual:?} but was passed as {format:?}"),
+                });
+            }
             let same = ws.textures.as_ref().is_some_and(|(v, f, _)| v == view && *f == format);
             if !same {
                 let bg = p.luma.bind_texture(&self.ctx.device, &ws.buffers, view, format)?;
@@ -540,14 +575,15 @@ impl GpuDetector {
         }
         slot.copied = slots;
         slot.state = SlotState::Recorded;
-        Ok(Ticket(i))
+        slot.generation += 1;
+        Ok(Ticket { slot: i, generation: slot.generation })
     }
 
     /// Starts mapping a recorded slot (call after the submit that carries it).
     pub fn start_readback(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<()> {
-        let slot = ws.ring.get_mut(t.0).ok_or_else(|| Error::Gpu { reason: "unknown readback ticket".into() })?;
+        let slot = ticket_slot(ws, t)?;
         if slot.state != SlotState::Recorded {
-            return Err(Error::Gpu { reason: format!("readback slot {} is {:?}, not recorded", t.0, slot.state) });
+            return Err(Error::Gpu { reason: format!("readback slot {} is {:?}, not recorded", t.slot, slot.state) });
         }
         let flag = slot.mapped.clone();
         if let Ok(mut g) = flag.lock() {
@@ -567,17 +603,21 @@ impl GpuDetector {
     /// does, or the caller's own `device.poll`), else `None`.
     pub fn try_finish_readback(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<Option<Frame>> {
         self.ctx.check_lost()?;
-        let slot = ws.ring.get_mut(t.0).ok_or_else(|| Error::Gpu { reason: "unknown readback ticket".into() })?;
+        let profiled = ws.timestamps.is_some();
+        let slot = ticket_slot(ws, t)?;
         if slot.state != SlotState::Mapping {
-            return Err(Error::Gpu { reason: format!("readback slot {} is {:?}, not mapping", t.0, slot.state) });
+            return Err(Error::Gpu { reason: format!("readback slot {} is {:?}, not mapping", t.slot, slot.state) });
         }
         let done = slot.mapped.lock().ok().and_then(|mut g| g.take());
         let Some(res) = done else { return Ok(None) };
         slot.state = SlotState::Free;
-        res.map_err(|e| Error::Gpu { reason: format!("map_async: {e}") })?;
+        if let Err(e) = res {
+            self.ctx.check_lost_polled()?;
+            return Err(Error::Gpu { reason: format!("map_async: {e}") });
+        }
         let frame = {
             let view = slot.staging.slice(..).get_mapped_range().map_err(|e| Error::Gpu { reason: format!("{e:?}") })?;
-            parse_frame(&self.cfg, &view, slot.copied, ws.timestamps.is_some(), self.ctx.queue.get_timestamp_period())
+            parse_frame(&self.cfg, &view, slot.copied, profiled, self.ctx.queue.get_timestamp_period())
         };
         slot.staging.unmap();
         frame.map(Some)
@@ -601,6 +641,7 @@ impl GpuDetector {
         mask: Option<GrayView<'_>>,
     ) -> Result<Frame> {
         image.check()?;
+        self.ctx.check_lost_polled()?;
         self.prepare_workspace(ws, image.width(), image.height())?;
         let ws = ws.as_mut().ok_or_else(|| Error::Gpu { reason: "no workspace".into() })?;
         self.set_mask(ws, mask)?;
@@ -620,6 +661,7 @@ impl GpuDetector {
     /// Runs SPEC 0-7 and reads back the edge map E of level 0 (255 = edge).
     pub fn edge_image(&self, ws: &mut Option<GpuWorkspace>, image: GrayView<'_>) -> Result<Plane<u8>> {
         image.check()?;
+        self.ctx.check_lost_polled()?;
         self.prepare_workspace(ws, image.width(), image.height())?;
         let ws = ws.as_mut().ok_or_else(|| Error::Gpu { reason: "no workspace".into() })?;
         ws.write_gray(&self.ctx.queue, image)?;
@@ -642,6 +684,15 @@ impl GpuDetector {
     #[doc(hidden)]
     pub fn map_blocking(&self, staging: &wgpu::Buffer, len: u64) -> Result<Vec<u8>> {
         map_blocking(&self.ctx, staging, len)
+    }
+}
+
+/// The slot a ticket names, if the ticket is current (not redeemed, not from another frame).
+fn ticket_slot(ws: &mut GpuWorkspace, t: Ticket) -> Result<&mut Slot> {
+    match ws.ring.get_mut(t.slot) {
+        Some(s) if s.generation == t.generation => Ok(s),
+        Some(_) => Err(Error::Gpu { reason: format!("stale readback ticket (slot {} was reused by a later frame)", t.slot) }),
+        None => Err(Error::Gpu { reason: format!("unknown readback ticket (slot {})", t.slot) }),
     }
 }
 

@@ -199,6 +199,20 @@ impl Kernel {
     }
 }
 
+/// A buffer holding `contents` (padded to 4 bytes), like wgpu's
+/// `create_buffer_init` but without its panic when the device was just lost:
+/// then the buffer is returned unfilled and the loss surfaces as
+/// [`Error::DeviceLost`] at the next check.
+pub fn init_buffer(device: &wgpu::Device, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    let size = (contents.len() as u64).next_multiple_of(4).max(4);
+    let buf = device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: true });
+    if let Ok(mut view) = buf.slice(..).get_mapped_range_mut() {
+        view.slice(..contents.len()).copy_from_slice(contents);
+    }
+    buf.unmap();
+    buf
+}
+
 /// Workgroups of `size` threads needed to cover `n` items.
 pub fn groups(n: u32, size: u32) -> u32 {
     n.div_ceil(size)

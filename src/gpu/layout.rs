@@ -9,6 +9,10 @@ use bytemuck::{Pod, Zeroable};
 
 /// Most pyramid levels the shaders handle (as `Config::validate` allows).
 pub const MAX_LEVELS: usize = 32;
+/// Most SPEC 5 windows along one axis of any length: `a = max(1, L/5)` with
+/// stride `max(1, a/2)` gives L windows for L < 10, L-1 for L < 15, L-2 for
+/// L < 20 (17 at L = 19) and at most 11 from L = 20 on (a test checks every L).
+pub const MAX_WINDOWS_PER_AXIS: usize = 17;
 /// Side of the 2D workgroups of per-pixel passes.
 pub const TILE: u32 = 16;
 
@@ -82,8 +86,10 @@ pub struct FrameLayout {
     pub sizes: Vec<(u32, u32)>,
     /// Atlas offset of each level, in pixels.
     pub offsets: Vec<u32>,
-    /// Pixels of all levels.
+    /// Pixels of all levels (saturated at `u32::MAX`; see [`total_px_exact`](Self::total_px_exact)).
     pub total_px: u32,
+    /// Pixels of all levels, not saturated: the GPU path refuses layouts over `u32::MAX`.
+    pub total_px_exact: u64,
     /// Per level window grid.
     pub grids: Vec<LevelGrid>,
     /// Index of each level's first window in the window-statistics buffer.
@@ -106,7 +112,7 @@ impl FrameLayout {
         let mut offsets = Vec::with_capacity(sizes.len());
         let mut total: u64 = 0;
         for &(w, h) in &sizes {
-            offsets.push(total as u32);
+            offsets.push(total.min(u32::MAX as u64) as u32);
             total += w as u64 * h as u64;
         }
         let mut grids = Vec::new();
@@ -129,6 +135,7 @@ impl FrameLayout {
                 ys,
             };
             p.levels[l] = [w, h, offsets[l], total_windows];
+            debug_assert!(g.xs.len() <= MAX_WINDOWS_PER_AXIS && g.ys.len() <= MAX_WINDOWS_PER_AXIS);
             p.grids[l] = [g.xs.len() as u32, g.ys.len() as u32, grid_data.len() as u32, a | (bb << 16)];
             let s = cfg.level_scale(l as u32);
             p.scales[l] = [s as f32, (31.0 * s) as f32, 0.0, 0.0];
@@ -162,13 +169,14 @@ impl FrameLayout {
         p.n_features = cfg.n_features;
         p.capacity = capacity;
         p.orientation_bins = cfg.orientation_bins;
-        p.total_px = total as u32;
+        p.total_px = total.min(u32::MAX as u64) as u32;
         p.max_w = width;
         p.max_h = height;
         Self {
             sizes,
             offsets,
-            total_px: total as u32,
+            total_px: total.min(u32::MAX as u64) as u32,
+            total_px_exact: total,
             grids,
             window_offsets,
             total_windows,
@@ -208,5 +216,29 @@ impl FrameLayout {
         let nx = self.grids.iter().map(|g| g.xs.len() as u32).max().unwrap_or(0);
         let ny = self.grids.iter().map(|g| g.ys.len() as u32).max().unwrap_or(0);
         (nx, ny)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_axis_has_more_than_max_windows() {
+        let worst = (1..=crate::image::MAX_SIDE).map(|l| window_origins(l, (l / 5).max(1)).len()).max().unwrap();
+        assert_eq!(worst, MAX_WINDOWS_PER_AXIS);
+    }
+
+    #[test]
+    fn atlas_offsets_and_capacity() {
+        let cfg = Config::default();
+        let l = FrameLayout::new(&cfg, 1241, 376);
+        assert_eq!(l.offsets[0], 0);
+        assert_eq!(l.offsets[1], 1241 * 376);
+        assert_eq!(l.total_px as usize, l.sizes.iter().map(|&(w, h)| (w * h) as usize).sum::<usize>());
+        // level 0 alone: ceil((1241-32)/4) * ceil((376-32)/4)
+        assert!(l.capacity >= 303 * 86);
+        let tiny = FrameLayout::new(&cfg, 20, 20);
+        assert_eq!(tiny.capacity, 1, "no level has room for a corner; one slot is kept");
     }
 }

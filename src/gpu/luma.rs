@@ -7,7 +7,6 @@ use super::buffers::Buffers;
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b, full_source};
 use super::pass::Pass;
 use crate::error::{Error, Result};
-use wgpu::util::DeviceExt;
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/luma.wgsl");
@@ -104,11 +103,7 @@ impl Pass for LumaPass {
             source: wgpu::ShaderSource::Wgsl(full_source(SOURCE).into()),
         });
         let kind = |v: u32| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("luma tex_kind"),
-                contents: bytemuck::cast_slice(&[v, 0, 0, 0]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
+            super::kernel::init_buffer(device, "luma tex_kind", bytemuck::cast_slice(&[v, 0u32, 0, 0]), wgpu::BufferUsages::UNIFORM)
         };
         Self {
             bytes: Kernel::from_module(
