@@ -9,7 +9,9 @@
 mod detect;
 mod draw;
 mod edges;
+// [eval module: issue 5]
 mod info;
+// [vo module: issue 6]
 mod inputs;
 mod report;
 
@@ -107,6 +109,8 @@ enum Cmd {
         #[arg(long, value_name = "NAME")]
         adapter: Option<String>,
     },
+    // [eval subcommand: issue 5]
+    // [vo and ate subcommands: issue 6]
 }
 
 impl Common {
@@ -178,6 +182,8 @@ where
         Cmd::Detect(a) => detect::run(a),
         Cmd::Edges(a) => edges::run(a),
         Cmd::Info { adapter } => info::run(adapter),
+        // [eval dispatch: issue 5]
+        // [vo and ate dispatch: issue 6]
     };
     match r {
         Ok(true) => ExitCode::SUCCESS,
