@@ -23,7 +23,8 @@ fn reflect101(i: i32, len: i32) -> i32 {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn horizontal(@builtin(global_invocation_id) id: vec3<u32>) {
+fn horizontal(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let w = i32(lw(l));
@@ -36,7 +37,8 @@ fn horizontal(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn vertical(@builtin(global_invocation_id) id: vec3<u32>) {
+fn vertical(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let h = i32(lh(l));

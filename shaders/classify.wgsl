@@ -38,7 +38,8 @@ fn class_of(mv: u32, t1: u32, v3: u32, alpha_pct: u32) -> u32 {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let p = loff(l) + id.y * lw(l) + id.x;

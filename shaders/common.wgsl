@@ -15,6 +15,8 @@ struct Params {
     scales: array<vec4<f32>, 32>,
     // per-level quotas of n_features, four per vec4
     quotas: array<vec4<u32>, 8>,
+    // per level: index of its first 16x16 tile in the tile list, tiles along x, along y, 0
+    tiles: array<vec4<u32>, 32>,
     n_levels: u32,
     delta_num: u32,
     delta_den: u32,
@@ -31,6 +33,10 @@ struct Params {
     total_px: u32,
     max_w: u32,
     max_h: u32,
+    total_tiles: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> P: Params;
@@ -48,3 +54,21 @@ fn clamped(l: u32, x: i32, y: i32) -> u32 {
 }
 
 fn quota(l: u32) -> u32 { return P.quotas[l / 4u][l % 4u]; }
+
+// Workgroups per row of the tile list (WebGPU's guaranteed per-dimension limit).
+const TILE_ROW: u32 = 65535u;
+
+// Per-pixel passes are dispatched over the list of the 16x16 tiles of every
+// level (FrameLayout::pixel_groups), so no workgroup falls outside its level.
+// Returns (x, y, level) of this invocation; x is 0xffffffff (outside every
+// level) for the padding workgroups of the last row, which is uniform per workgroup.
+fn tile_pixel(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
+    let t = wg.x + wg.y * TILE_ROW;
+    if (t >= P.total_tiles) { return vec3<u32>(0xffffffffu, 0xffffffffu, 0u); }
+    var l = 0u;
+    for (var k = 1u; k < P.n_levels; k++) {
+        if (t >= P.tiles[k].x) { l = k; }
+    }
+    let r = t - P.tiles[l].x;
+    return vec3<u32>((r % P.tiles[l].y) * 16u + li.x, (r / P.tiles[l].y) * 16u + li.y, l);
+}

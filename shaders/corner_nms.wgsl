@@ -1,7 +1,7 @@
 // SPEC 9: non-maximum suppression among corner candidates. Mirrors
 // src/cpu/corner_nms.rs. `cand` + `resp` -> survivors appended to `corners`
 // (GpuKeypoint, src/gpu/buffers.rs) with counters[CORNERS] as the cursor.
-// One invocation per pixel, all levels in one dispatch (z = level). The
+// One invocation per pixel, all levels in one dispatch (over the tile list). The
 // append order is nondeterministic; select.wgsl puts the list in SPEC 9 order.
 
 // src/gpu/buffers.rs's GpuKeypoint, 12 words.
@@ -35,7 +35,8 @@ fn beats(rq: f32, q: vec2<u32>, rp: f32, p: vec2<u32>) -> bool {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     let l = id.z;
     let w = lw(l);
     let h = lh(l);

@@ -1,6 +1,6 @@
 // SPEC 2: LSD 2x2 gradient (paper Eq. 2) in integers. Mirrors src/cpu/gradient.rs.
 // denoised -> gx (gx2 as i32), gy (gy2 as i32), s (S = gx2^2 + gy2^2), m (M = isqrt(S) >> 1).
-// One invocation per pixel, all levels in one dispatch (z = level).
+// One invocation per pixel, all levels in one dispatch (over the tile list).
 
 @group(0) @binding(1) var<storage, read> denoised: array<u32>;
 @group(0) @binding(2) var<storage, read_write> gx: array<i32>;
@@ -31,7 +31,8 @@ fn isqrt(v: u32) -> u32 {
 fn magnitude(sq: u32) -> u32 { return isqrt(sq) >> 1u; }
 
 @compute @workgroup_size(16, 16, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let x = i32(id.x);

@@ -1,6 +1,6 @@
 // SPEC 4, first half: the 256-bin histogram of M8 = min(M, 255), per level.
 // Mirrors src/cpu/histogram.rs. m -> hist[l * 256 + M8], all levels in one
-// dispatch (z = level). `hist` is cleared by the pass before this runs.
+// dispatch (over the tile list). `hist` is cleared by the pass before this runs.
 //
 // Each workgroup counts its 16x16 tile into workgroup-private bins, then adds
 // each non-empty bin to the global histogram once (integer adds commute, so
@@ -13,14 +13,15 @@ var<workgroup> bins: array<atomic<u32>, 256>;
 
 @compute @workgroup_size(16, 16, 1)
 fn main(
-    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_id) lid: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
     @builtin(workgroup_id) wg: vec3<u32>,
 ) {
-    let l = wg.z;
-    // Whole tile outside this (smaller) level: workgroup-uniform, so the
+    let id = tile_pixel(wg, lid);
+    let l = id.z;
+    // A padding workgroup of the tile list: workgroup-uniform, so the
     // barriers below are still reached by all or none.
-    if (wg.x * 16u >= lw(l) || wg.y * 16u >= lh(l)) { return; }
+    if (wg.x + wg.y * TILE_ROW >= P.total_tiles) { return; }
     atomicStore(&bins[li], 0u);
     workgroupBarrier();
     if (id.x < lw(l) && id.y < lh(l)) {

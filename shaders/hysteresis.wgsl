@@ -98,14 +98,16 @@ fn at(id: vec3<u32>) -> u32 {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn init(@builtin(global_invocation_id) id: vec3<u32>) {
+fn init(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     if (!inside(id)) { return; }
     let i = at(id);
     atomicStore(&labels[i], i);
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn merge(@builtin(global_invocation_id) id: vec3<u32>) {
+fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     if (!inside(id)) { return; }
     let i = at(id);
     if (!is_active(i)) { return; }
@@ -121,7 +123,8 @@ fn merge(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn compress(@builtin(global_invocation_id) id: vec3<u32>) {
+fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     if (!inside(id)) { return; }
     let i = at(id);
     if (!is_active(i)) { return; }
@@ -131,7 +134,8 @@ fn compress(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn flag(@builtin(global_invocation_id) id: vec3<u32>) {
+fn flag(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     if (!inside(id)) { return; }
     let i = at(id);
     if (ruled[i] != STRONG) { return; }
@@ -140,7 +144,8 @@ fn flag(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn final_edges(@builtin(global_invocation_id) id: vec3<u32>) {
+fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     if (!inside(id)) { return; }
     let i = at(id);
     var e = 0u;

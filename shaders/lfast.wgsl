@@ -1,7 +1,7 @@
 // SPEC 8: the L-FAST corner test on the edge map (paper 3.2, Steps 1-5).
 // Mirrors src/cpu/lfast.rs. `edges` (+ `mask` when P.use_mask == 1) ->
 // `cand` (1 = candidate, 0 otherwise; every pixel of every level is written).
-// One invocation per pixel, all levels in one dispatch (z = level).
+// One invocation per pixel, all levels in one dispatch (over the tile list).
 
 @group(0) @binding(1) var<storage, read> edges: array<u32>;
 @group(0) @binding(2) var<storage, read> mask: array<u32>;
@@ -107,7 +107,8 @@ fn is_corner(l: u32, px: i32, py: i32) -> bool {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     let l = id.z;
     let w = lw(l);
     let h = lh(l);

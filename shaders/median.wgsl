@@ -1,5 +1,5 @@
 // SPEC 1: noise-flagged 3x3 median. Mirrors src/cpu/median.rs.
-// One invocation per pixel, all levels in one dispatch (z = level).
+// One invocation per pixel, all levels in one dispatch (over the tile list).
 
 @group(0) @binding(1) var<storage, read> src: array<u32>;
 @group(0) @binding(2) var<storage, read_write> dst: array<u32>;
@@ -44,7 +44,8 @@ fn median9(x: i32, y: i32, l: u32) -> u32 {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let x = i32(id.x);

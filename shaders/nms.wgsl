@@ -1,7 +1,7 @@
 // SPEC 3: non-maximum suppression across the gradient direction, with the
 // direction sector found by integer tests. Mirrors src/cpu/nms.rs.
 // gx, gy, s -> nms (1 = survivor, 0 otherwise). One invocation per pixel,
-// all levels in one dispatch (z = level).
+// all levels in one dispatch (over the tile list).
 
 @group(0) @binding(1) var<storage, read> gx: array<i32>;
 @group(0) @binding(2) var<storage, read> gy: array<i32>;
@@ -31,7 +31,8 @@ fn s_or_zero(l: u32, x: i32, y: i32) -> u32 {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let x = i32(id.x);

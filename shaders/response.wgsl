@@ -1,7 +1,7 @@
 // SPEC 9: Harris corner response on D (7x7 block, 3x3 Sobel, k = 0.04), as
 // OpenCV ORB's HARRIS_SCORE. Mirrors src/cpu/response.rs.
 // `cand` (1 = candidate) + `denoised` -> `resp` (f32 bits) at candidates, 0
-// elsewhere. One invocation per pixel, all levels in one dispatch (z = level).
+// elsewhere. One invocation per pixel, all levels in one dispatch (over the tile list).
 //
 // Bit-identical to the CPU: the structure sums are exact integers, and the
 // final formula (harris_from_sums) is f32 in the CPU's operation order, with
@@ -98,7 +98,8 @@ fn structure_sums(l: u32, x: i32, y: i32) -> vec3<i32> {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let i = loff(l) + id.y * lw(l) + id.x;

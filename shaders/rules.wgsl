@@ -1,6 +1,6 @@
 // SPEC 7 rules 1 and 2: isolated-edge suppression (paper Algorithm 3).
 // Mirrors src/cpu/rules.rs. `classes` (SPEC 6) -> `ruled`, one invocation per
-// pixel, all levels in one dispatch (z = level). Both rules read the classes
+// pixel, all levels in one dispatch (over the tile list). Both rules read the classes
 // of SPEC 6 only, so the result does not depend on the order of invocations.
 
 @group(0) @binding(1) var<storage, read> classes: array<u32>;
@@ -44,7 +44,8 @@ fn rule_at(l: u32, x: i32, y: i32) -> u32 {
 }
 
 @compute @workgroup_size(16, 16, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_pixel(wg, li);
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     ruled[loff(l) + id.y * lw(l) + id.x] = rule_at(l, i32(id.x), i32(id.y));

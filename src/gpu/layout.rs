@@ -13,6 +13,8 @@ pub const MAX_LEVELS: usize = 32;
 /// stride `max(1, a/2)` gives L windows for L < 10, L-1 for L < 15, L-2 for
 /// L < 20 (17 at L = 19) and at most 11 from L = 20 on (a test checks every L).
 pub const MAX_WINDOWS_PER_AXIS: usize = 17;
+/// Workgroups per row of the tile list (WebGPU's guaranteed per-dimension limit).
+pub const TILE_ROW: u32 = 65535;
 /// Side of the 2D workgroups of per-pixel passes.
 pub const TILE: u32 = 16;
 
@@ -28,6 +30,8 @@ pub struct Params {
     pub scales: [[f32; 4]; MAX_LEVELS],
     /// Per-level quotas of `n_features`, four per row.
     pub quotas: [[u32; 4]; MAX_LEVELS / 4],
+    /// Per level: first tile in the tile list, tiles along x, along y, 0.
+    pub tiles: [[u32; 4]; MAX_LEVELS],
     /// Number of levels.
     pub n_levels: u32,
     /// SPEC 1 delta numerator.
@@ -60,6 +64,10 @@ pub struct Params {
     pub max_w: u32,
     /// Height of level 0.
     pub max_h: u32,
+    /// 16x16 tiles of all levels.
+    pub total_tiles: u32,
+    /// Padding to 16 bytes.
+    pub _pad: [u32; 3],
 }
 
 /// One level's window grid (SPEC 5), as the CPU reference lays it out.
@@ -135,6 +143,9 @@ impl FrameLayout {
                 ys,
             };
             p.levels[l] = [w, h, offsets[l], total_windows];
+            let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+            p.tiles[l] = [p.total_tiles, tx, ty, 0];
+            p.total_tiles = p.total_tiles.saturating_add(tx.saturating_mul(ty));
             debug_assert!(g.xs.len() <= MAX_WINDOWS_PER_AXIS && g.ys.len() <= MAX_WINDOWS_PER_AXIS);
             p.grids[l] = [g.xs.len() as u32, g.ys.len() as u32, grid_data.len() as u32, a | (bb << 16)];
             let s = cfg.level_scale(l as u32);
@@ -191,11 +202,12 @@ impl FrameLayout {
         self.sizes.len() as u32
     }
 
-    /// Workgroups of a per-pixel pass over all levels at once: tiles of level 0
-    /// in x and y, one layer per level (smaller levels return early).
+    /// Workgroups of a per-pixel pass over all levels at once: the list of
+    /// every level's 16x16 tiles, in rows of [`TILE_ROW`] workgroups
+    /// (shaders/common.wgsl `tile_pixel` maps a workgroup to its tile).
     pub fn pixel_groups(&self) -> [u32; 3] {
-        let (w, h) = self.sizes[0];
-        [w.div_ceil(TILE), h.div_ceil(TILE), self.n_levels()]
+        let t = self.params.total_tiles;
+        if t <= TILE_ROW { [t, 1, 1] } else { [TILE_ROW, t.div_ceil(TILE_ROW), 1] }
     }
 
     /// Workgroups of a per-pixel pass over level `l` alone.
