@@ -72,3 +72,19 @@ fn tile_pixel(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
     let r = t - P.tiles[l].x;
     return vec3<u32>((r % P.tiles[l].y) * 16u + li.x, (r / P.tiles[l].y) * 16u + li.y, l);
 }
+
+// One keypoint: GpuKeypoint in src/gpu/buffers.rs, 12 words (48 bytes).
+struct Kp {
+    x: f32,
+    y: f32,
+    size: f32,
+    angle: f32,
+    response: f32,
+    level: u32,
+    px: u32,
+    py: u32,
+    m10: i32,
+    m01: i32,
+    bin: u32,
+    pad: u32,
+}

@@ -4,22 +4,6 @@
 // One invocation per pixel, all levels in one dispatch (over the tile list). The
 // append order is nondeterministic; select.wgsl puts the list in SPEC 9 order.
 
-// src/gpu/buffers.rs's GpuKeypoint, 12 words.
-struct Kp {
-    x: f32,
-    y: f32,
-    size: f32,
-    angle: f32,
-    response: f32,
-    level: u32,
-    px: u32,
-    py: u32,
-    m10: i32,
-    m01: i32,
-    bin: u32,
-    pad: u32,
-}
-
 @group(0) @binding(1) var<storage, read> cand: array<u32>;
 @group(0) @binding(2) var<storage, read> resp: array<u32>;
 @group(0) @binding(3) var<storage, read_write> corners: array<Kp>;

@@ -5,22 +5,6 @@
 // so (little-endian) bit i of byte j is pair 8j + i and the buffer's bytes
 // are the [u8; 32] descriptors.
 
-// GpuKeypoint in src/gpu/buffers.rs (48 bytes).
-struct Kp {
-    x: f32,
-    y: f32,
-    size: f32,
-    angle: f32,
-    response: f32,
-    level: u32,
-    px: u32,
-    py: u32,
-    m10: i32,
-    m01: i32,
-    bin: u32,
-    pad: u32,
-}
-
 const KEYPOINTS: u32 = 1u; // counter::KEYPOINTS
 const PI: f32 = 3.14159265358979323846;
 

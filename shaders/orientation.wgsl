@@ -5,22 +5,6 @@
 // the *unsmoothed* level; the angle is an f32 approximation (the host
 // recomputes it exactly from m10, m01).
 
-// GpuKeypoint in src/gpu/buffers.rs (48 bytes).
-struct Kp {
-    x: f32,
-    y: f32,
-    size: f32,
-    angle: f32,
-    response: f32,
-    level: u32,
-    px: u32,
-    py: u32,
-    m10: i32,
-    m01: i32,
-    bin: u32,
-    pad: u32,
-}
-
 const KEYPOINTS: u32 = 1u; // counter::KEYPOINTS
 const HALF_PATCH: i32 = 15;
 // OpenCV ORB's umax: half-width of row v of the radius-15 disc (cpu::orientation::UMAX).

@@ -17,22 +17,6 @@
 // Both rank loops are O(n^2) over the corner list, tiled through workgroup
 // memory. Positions are unique, so the order is total and the output deterministic.
 
-// src/gpu/buffers.rs's GpuKeypoint, 12 words.
-struct Kp {
-    x: f32,
-    y: f32,
-    size: f32,
-    angle: f32,
-    response: f32,
-    level: u32,
-    px: u32,
-    py: u32,
-    m10: i32,
-    m01: i32,
-    bin: u32,
-    pad: u32,
-}
-
 @group(0) @binding(1) var<storage, read> corners: array<Kp>;
 @group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;
 // Per corner: order key, taken (0/1), preceding corners of its level, 0.

@@ -1,10 +1,8 @@
 //! SPEC 2 on the GPU: shaders/gradient.wgsl, mirroring src/cpu/gradient.rs.
 //! `denoised` -> `gx`, `gy` (i32 bits), `s`, `m`, all levels in one dispatch.
 
-use super::buffers::Buffers;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
-use super::pass::Pass;
-use crate::error::Result;
+use super::kernel::{Binding, PARAMS, Slot, b};
+use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/gradient.wgsl");
@@ -18,37 +16,14 @@ pub const BINDINGS: &[Binding] = &[
     b(5, "m", Slot::ReadWrite),
 ];
 
-/// The LSD gradient pass.
-#[derive(Debug)]
-pub struct GradientPass {
-    kernel: Kernel,
-}
-
-impl Pass for GradientPass {
-    type Bound = wgpu::BindGroup;
-    const NAME: &'static str = "gradient";
-
-    fn new(device: &wgpu::Device) -> Self {
-        Self {
-            kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS),
-        }
+simple_pass! {
+    /// The LSD gradient pass.
+    GradientPass = "gradient" {
+        "denoised" = denoised,
+        "gx" = gx,
+        "gy" = gy,
+        "s" = s,
+        "m" = m,
     }
-
-    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
-        self.kernel.bind(
-            device,
-            &[
-                ("P", &b.params),
-                ("denoised", &b.denoised),
-                ("gx", &b.gx),
-                ("gy", &b.gy),
-                ("s", &b.s),
-                ("m", &b.m),
-            ],
-        )
-    }
-
-    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.kernel.dispatch(pass, bound, b.layout.pixel_groups());
-    }
+    dispatch |b| Groups::Direct(b.layout.pixel_groups())
 }

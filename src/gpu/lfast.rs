@@ -2,10 +2,8 @@
 //! src/cpu/lfast.rs. `edges` (+ `mask` when `Params::use_mask` is 1) ->
 //! `cand` (1 = candidate), all levels in one dispatch.
 
-use super::buffers::Buffers;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
-use super::pass::Pass;
-use crate::error::Result;
+use super::kernel::{Binding, PARAMS, Slot, b};
+use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/lfast.wgsl");
@@ -17,35 +15,12 @@ pub const BINDINGS: &[Binding] = &[
     b(3, "cand", Slot::ReadWrite),
 ];
 
-/// The L-FAST candidate pass.
-#[derive(Debug)]
-pub struct LfastPass {
-    kernel: Kernel,
-}
-
-impl Pass for LfastPass {
-    type Bound = wgpu::BindGroup;
-    const NAME: &'static str = "lfast";
-
-    fn new(device: &wgpu::Device) -> Self {
-        Self {
-            kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS),
-        }
+simple_pass! {
+    /// The L-FAST candidate pass.
+    LfastPass = "lfast" {
+        "edges" = edges,
+        "mask" = mask,
+        "cand" = cand,
     }
-
-    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
-        self.kernel.bind(
-            device,
-            &[
-                ("P", &b.params),
-                ("edges", &b.edges),
-                ("mask", &b.mask),
-                ("cand", &b.cand),
-            ],
-        )
-    }
-
-    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.kernel.dispatch(pass, bound, b.layout.pixel_groups());
-    }
+    dispatch |b| Groups::Direct(b.layout.pixel_groups())
 }

@@ -2,10 +2,8 @@
 //! src/cpu/local_threshold.rs. `m` + `grid` -> `windows` (min, max, lower
 //! median, V3 per window), one workgroup per window, all levels in one dispatch.
 
-use super::buffers::Buffers;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
-use super::pass::Pass;
-use crate::error::Result;
+use super::kernel::{Binding, PARAMS, Slot, b};
+use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/local_threshold.wgsl");
@@ -17,37 +15,15 @@ pub const BINDINGS: &[Binding] = &[
     b(3, "windows", Slot::ReadWrite),
 ];
 
-/// The window statistics pass.
-#[derive(Debug)]
-pub struct LocalThresholdPass {
-    kernel: Kernel,
-}
-
-impl Pass for LocalThresholdPass {
-    type Bound = wgpu::BindGroup;
-    const NAME: &'static str = "local_threshold";
-
-    fn new(device: &wgpu::Device) -> Self {
-        Self {
-            kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS),
-        }
+simple_pass! {
+    /// The window statistics pass.
+    LocalThresholdPass = "local_threshold" {
+        "m" = m,
+        "grid" = grid,
+        "windows" = windows,
     }
-
-    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
-        self.kernel.bind(
-            device,
-            &[
-                ("P", &b.params),
-                ("m", &b.m),
-                ("grid", &b.grid),
-                ("windows", &b.windows),
-            ],
-        )
-    }
-
-    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
+    dispatch |b| {
         let (nx, ny) = b.layout.max_windows();
-        self.kernel
-            .dispatch(pass, bound, [nx, ny, b.layout.n_levels()]);
+        Groups::Direct([nx, ny, b.layout.n_levels()])
     }
 }

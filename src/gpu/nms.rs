@@ -1,10 +1,8 @@
 //! SPEC 3 on the GPU: shaders/nms.wgsl, mirroring src/cpu/nms.rs.
 //! `gx`, `gy`, `s` -> `nms` (1 = survivor), all levels in one dispatch.
 
-use super::buffers::Buffers;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
-use super::pass::Pass;
-use crate::error::Result;
+use super::kernel::{Binding, PARAMS, Slot, b};
+use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/nms.wgsl");
@@ -17,36 +15,13 @@ pub const BINDINGS: &[Binding] = &[
     b(4, "nms", Slot::ReadWrite),
 ];
 
-/// The gradient non-maximum suppression pass.
-#[derive(Debug)]
-pub struct NmsPass {
-    kernel: Kernel,
-}
-
-impl Pass for NmsPass {
-    type Bound = wgpu::BindGroup;
-    const NAME: &'static str = "nms";
-
-    fn new(device: &wgpu::Device) -> Self {
-        Self {
-            kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS),
-        }
+simple_pass! {
+    /// The gradient non-maximum suppression pass.
+    NmsPass = "nms" {
+        "gx" = gx,
+        "gy" = gy,
+        "s" = s,
+        "nms" = nms,
     }
-
-    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
-        self.kernel.bind(
-            device,
-            &[
-                ("P", &b.params),
-                ("gx", &b.gx),
-                ("gy", &b.gy),
-                ("s", &b.s),
-                ("nms", &b.nms),
-            ],
-        )
-    }
-
-    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.kernel.dispatch(pass, bound, b.layout.pixel_groups());
-    }
+    dispatch |b| Groups::Direct(b.layout.pixel_groups())
 }

@@ -4,10 +4,9 @@
 //! with the pattern of the keypoint's bin, or rotated per keypoint by its
 //! angle when `orientation_bins` is 0.
 
-use super::buffers::{Buffers, indirect};
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
-use super::pass::Pass;
-use crate::error::Result;
+use super::buffers::indirect;
+use super::kernel::{Binding, PARAMS, Slot, b};
+use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/orb.wgsl");
@@ -21,38 +20,14 @@ pub const BINDINGS: &[Binding] = &[
     b(5, "descriptors", Slot::ReadWrite),
 ];
 
-/// The descriptor pass.
-#[derive(Debug)]
-pub struct OrbPass {
-    kernel: Kernel,
-}
-
-impl Pass for OrbPass {
-    type Bound = wgpu::BindGroup;
-    const NAME: &'static str = "orb";
-
-    fn new(device: &wgpu::Device) -> Self {
-        Self {
-            kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS),
-        }
+simple_pass! {
+    /// The descriptor pass.
+    OrbPass = "orb" {
+        "smoothed" = smooth,
+        "keypoints" = keypoints,
+        "counters" = counters,
+        "patterns" = patterns,
+        "descriptors" = descriptors,
     }
-
-    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
-        self.kernel.bind(
-            device,
-            &[
-                ("P", &b.params),
-                ("smoothed", &b.smooth),
-                ("keypoints", &b.keypoints),
-                ("counters", &b.counters),
-                ("patterns", &b.patterns),
-                ("descriptors", &b.descriptors),
-            ],
-        )
-    }
-
-    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.kernel
-            .dispatch_indirect(pass, bound, &b.indirect, indirect::KEYPOINTS);
-    }
+    dispatch |b| Groups::Indirect(indirect::KEYPOINTS)
 }

@@ -3,10 +3,9 @@
 //! `counters[KEYPOINTS]`): m10, m01 on the unsmoothed `gray` level, the
 //! orientation bin, and an approximate angle, written back into `keypoints`.
 
-use super::buffers::{Buffers, indirect};
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
-use super::pass::Pass;
-use crate::error::Result;
+use super::buffers::indirect;
+use super::kernel::{Binding, PARAMS, Slot, b};
+use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/orientation.wgsl");
@@ -19,37 +18,13 @@ pub const BINDINGS: &[Binding] = &[
     b(4, "angle_bounds", Slot::Read),
 ];
 
-/// The orientation pass.
-#[derive(Debug)]
-pub struct OrientationPass {
-    kernel: Kernel,
-}
-
-impl Pass for OrientationPass {
-    type Bound = wgpu::BindGroup;
-    const NAME: &'static str = "orientation";
-
-    fn new(device: &wgpu::Device) -> Self {
-        Self {
-            kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS),
-        }
+simple_pass! {
+    /// The orientation pass.
+    OrientationPass = "orientation" {
+        "gray" = gray,
+        "keypoints" = keypoints,
+        "counters" = counters,
+        "angle_bounds" = angle_bounds,
     }
-
-    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
-        self.kernel.bind(
-            device,
-            &[
-                ("P", &b.params),
-                ("gray", &b.gray),
-                ("keypoints", &b.keypoints),
-                ("counters", &b.counters),
-                ("angle_bounds", &b.angle_bounds),
-            ],
-        )
-    }
-
-    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.kernel
-            .dispatch_indirect(pass, bound, &b.indirect, indirect::KEYPOINTS);
-    }
+    dispatch |b| Groups::Indirect(indirect::KEYPOINTS)
 }

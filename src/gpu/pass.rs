@@ -19,3 +19,58 @@ pub trait Pass: Sized {
     /// Commands that must precede the compute pass (clearing counters), recorded on the encoder.
     fn prepare(&self, _encoder: &mut wgpu::CommandEncoder, _b: &Buffers) {}
 }
+
+/// How a [`simple_pass!`] stage is dispatched.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Groups {
+    /// Fixed workgroup counts.
+    Direct([u32; 3]),
+    /// Counts read from `Buffers::indirect` at this offset (sized on the GPU).
+    Indirect(u64),
+}
+
+/// A stage with one kernel (entry point `main`, the module's `SOURCE` and
+/// `BINDINGS`) whose bindings are [`Buffers`] fields named in the macro:
+/// `"wgsl_name" = field`. `dispatch |b| expr` gives its [`Groups`]; `clear
+/// a, b` zeroes those buffers before the pass (atomic accumulators).
+macro_rules! simple_pass {
+    (
+        $(#[$meta:meta])*
+        $name:ident = $stage:literal { $($var:literal = $field:ident),* $(,)? }
+        dispatch |$b:ident| $groups:expr
+        $(; clear $($clear:ident),+)?
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug)]
+        pub struct $name {
+            kernel: $crate::gpu::kernel::Kernel,
+        }
+
+        impl $crate::gpu::pass::Pass for $name {
+            type Bound = wgpu::BindGroup;
+            const NAME: &'static str = $stage;
+
+            fn new(device: &wgpu::Device) -> Self {
+                Self { kernel: $crate::gpu::kernel::Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS) }
+            }
+
+            fn bind(&self, device: &wgpu::Device, b: &$crate::gpu::buffers::Buffers) -> $crate::error::Result<wgpu::BindGroup> {
+                self.kernel.bind(device, &[("P", &b.params), $(($var, &b.$field)),*])
+            }
+
+            fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, $b: &$crate::gpu::buffers::Buffers) {
+                match $groups {
+                    $crate::gpu::pass::Groups::Direct(g) => self.kernel.dispatch(pass, bound, g),
+                    $crate::gpu::pass::Groups::Indirect(off) => self.kernel.dispatch_indirect(pass, bound, &$b.indirect, off),
+                }
+            }
+
+            $(
+                fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &$crate::gpu::buffers::Buffers) {
+                    $(encoder.clear_buffer(&b.$clear, 0, None);)+
+                }
+            )?
+        }
+    };
+}
+pub(crate) use simple_pass;

@@ -2,10 +2,8 @@
 //! src/cpu/response.rs bit for bit. `cand` + `denoised` -> `resp` (f32 bits at
 //! candidates, 0 elsewhere), all levels in one dispatch.
 
-use super::buffers::Buffers;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
-use super::pass::Pass;
-use crate::error::Result;
+use super::kernel::{Binding, PARAMS, Slot, b};
+use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/response.wgsl");
@@ -17,35 +15,12 @@ pub const BINDINGS: &[Binding] = &[
     b(3, "resp", Slot::ReadWrite),
 ];
 
-/// The Harris response pass.
-#[derive(Debug)]
-pub struct ResponsePass {
-    kernel: Kernel,
-}
-
-impl Pass for ResponsePass {
-    type Bound = wgpu::BindGroup;
-    const NAME: &'static str = "response";
-
-    fn new(device: &wgpu::Device) -> Self {
-        Self {
-            kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS),
-        }
+simple_pass! {
+    /// The Harris response pass.
+    ResponsePass = "response" {
+        "cand" = cand,
+        "denoised" = denoised,
+        "resp" = resp,
     }
-
-    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
-        self.kernel.bind(
-            device,
-            &[
-                ("P", &b.params),
-                ("cand", &b.cand),
-                ("denoised", &b.denoised),
-                ("resp", &b.resp),
-            ],
-        )
-    }
-
-    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.kernel.dispatch(pass, bound, b.layout.pixel_groups());
-    }
+    dispatch |b| Groups::Direct(b.layout.pixel_groups())
 }

@@ -2,10 +2,8 @@
 //! src/cpu/rules.rs. `classes` -> `ruled` (NONE, WEAK, STRONG), all levels in
 //! one dispatch.
 
-use super::buffers::Buffers;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
-use super::pass::Pass;
-use crate::error::Result;
+use super::kernel::{Binding, PARAMS, Slot, b};
+use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/rules.wgsl");
@@ -16,34 +14,11 @@ pub const BINDINGS: &[Binding] = &[
     b(2, "ruled", Slot::ReadWrite),
 ];
 
-/// The isolated-edge suppression pass (rules 1 and 2).
-#[derive(Debug)]
-pub struct RulesPass {
-    kernel: Kernel,
-}
-
-impl Pass for RulesPass {
-    type Bound = wgpu::BindGroup;
-    const NAME: &'static str = "rules";
-
-    fn new(device: &wgpu::Device) -> Self {
-        Self {
-            kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS),
-        }
+simple_pass! {
+    /// The isolated-edge suppression pass (rules 1 and 2).
+    RulesPass = "rules" {
+        "classes" = classes,
+        "ruled" = ruled,
     }
-
-    fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
-        self.kernel.bind(
-            device,
-            &[
-                ("P", &b.params),
-                ("classes", &b.classes),
-                ("ruled", &b.ruled),
-            ],
-        )
-    }
-
-    fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.kernel.dispatch(pass, bound, b.layout.pixel_groups());
-    }
+    dispatch |b| Groups::Direct(b.layout.pixel_groups())
 }
