@@ -54,7 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let ctx = GpuContext::new(&GpuOptions::default())?;
     println!("adapter: {} ({:?}), {} frames of {w}x{h}, ring {ring}", ctx.info.name, ctx.info.backend, imgs.len());
-    let det = GpuDetector::with_options(ctx.clone(), Config::default(), GpuDetectorOptions { ring, profile: true })?;
+    let det = GpuDetector::with_options(ctx.clone(), Config::default(), GpuDetectorOptions { ring, profile: true, ..Default::default() })?;
     let mut ws = Some(det.workspace(w, h)?);
 
     // warm-up (pipeline compilation, first allocations)

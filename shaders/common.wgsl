@@ -34,7 +34,7 @@ struct Params {
     max_w: u32,
     max_h: u32,
     total_tiles: u32,
-    _pad0: u32,
+    tile_row: u32,      // workgroups per row of the tile list (the device's limit)
     _pad1: u32,
     _pad2: u32,
 }
@@ -55,15 +55,12 @@ fn clamped(l: u32, x: i32, y: i32) -> u32 {
 
 fn quota(l: u32) -> u32 { return P.quotas[l / 4u][l % 4u]; }
 
-// Workgroups per row of the tile list (WebGPU's guaranteed per-dimension limit).
-const TILE_ROW: u32 = 65535u;
-
 // Per-pixel passes are dispatched over the list of the 16x16 tiles of every
 // level (FrameLayout::pixel_groups), so no workgroup falls outside its level.
 // Returns (x, y, level) of this invocation; x is 0xffffffff (outside every
 // level) for the padding workgroups of the last row, which is uniform per workgroup.
 fn tile_pixel(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
-    let t = wg.x + wg.y * TILE_ROW;
+    let t = wg.x + wg.y * P.tile_row;
     if (t >= P.total_tiles) { return vec3<u32>(0xffffffffu, 0xffffffffu, 0u); }
     var l = 0u;
     for (var k = 1u; k < P.n_levels; k++) {

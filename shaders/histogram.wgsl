@@ -21,7 +21,7 @@ fn main(
     let l = id.z;
     // A padding workgroup of the tile list: workgroup-uniform, so the
     // barriers below are still reached by all or none.
-    if (wg.x + wg.y * TILE_ROW >= P.total_tiles) { return; }
+    if (wg.x + wg.y * P.tile_row >= P.total_tiles) { return; }
     atomicStore(&bins[li], 0u);
     workgroupBarrier();
     if (id.x < lw(l) && id.y < lh(l)) {

@@ -171,7 +171,7 @@ fn texture_input_equals_gray_input() {
 fn frames_in_flight_through_the_ring() {
     let Some(ctx) = t::context() else { return };
     let cfg = Config::default();
-    let gpu = GpuDetector::with_options(ctx.clone(), cfg.clone(), GpuDetectorOptions { ring: 3, profile: true }).unwrap();
+    let gpu = GpuDetector::with_options(ctx.clone(), cfg.clone(), GpuDetectorOptions { ring: 3, profile: true, ..Default::default() }).unwrap();
     let cpu = CpuDetector::new(cfg).unwrap();
     let frames: Vec<Plane<u8>> = (0..5).map(|i| t::test_image(200, 120, 7 + i)).collect();
     let mut ws = gpu.workspace(200, 120).unwrap();
@@ -198,6 +198,43 @@ fn frames_in_flight_through_the_ring() {
         if ctx.has_timestamps() {
             assert_eq!(g.pass_ms.len(), lfast::gpu::detector::STAGES.len());
         }
+    }
+}
+
+#[test]
+fn frames_with_more_keypoints_than_the_readback_hint_are_complete() {
+    // The staging copy holds 16 keypoints; the rest comes from the device-side
+    // spill copy of the same ring slot, also with frames in flight.
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config::default();
+    let opts = GpuDetectorOptions { ring: 2, readback_hint: 16, ..Default::default() };
+    let gpu = GpuDetector::with_options(ctx.clone(), cfg.clone(), opts).unwrap();
+    let cpu = CpuDetector::new(cfg).unwrap();
+    let frames: Vec<Plane<u8>> = golden_images().into_iter().take(3).map(|(_, p)| p).collect();
+    let mut ws = None;
+    for f in &frames {
+        let g = gpu.detect_and_compute(&mut ws, f.view(), None).unwrap();
+        let c = cpu.detect_and_compute(f.view(), None).unwrap();
+        assert!(c.0.len() > 16, "the test needs frames over the hint");
+        assert_same("hint 16, blocking", &g, &c);
+        assert_eq!(g.count as usize, c.0.len());
+    }
+    let (w, h) = (frames[0].width, frames[0].height);
+    let mut ws = gpu.workspace(w, h).unwrap();
+    let mut tickets = Vec::new();
+    for _ in 0..2 {
+        ws.write_gray(&ctx.queue, frames[0].view()).unwrap();
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        gpu.encode(&mut enc, GpuInput::Written, &mut ws).unwrap();
+        tickets.push(gpu.encode_readback(&mut enc, &mut ws).unwrap());
+        ctx.queue.submit([enc.finish()]);
+    }
+    for tk in &tickets {
+        gpu.start_readback(&mut ws, *tk).unwrap();
+    }
+    let c = cpu.detect_and_compute(frames[0].view(), None).unwrap();
+    for tk in tickets {
+        assert_same("hint 16, in flight", &gpu.finish_readback(&mut ws, tk).unwrap(), &c);
     }
 }
 

@@ -523,6 +523,7 @@ fn frames_in_flight_are_bit_identical_to_blocking_ones() {
         GpuDetectorOptions {
             ring: 4,
             profile: false,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -1142,6 +1143,7 @@ fn unsupported_configs_are_typed_errors_and_auto_runs_them_on_the_cpu() {
         GpuDetectorOptions {
             ring: 0,
             profile: false,
+            ..Default::default()
         },
     )
     .unwrap_err();
@@ -1223,6 +1225,7 @@ fn readback_tickets_are_checked() {
         GpuDetectorOptions {
             ring: 2,
             profile: false,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -1275,6 +1278,7 @@ fn readback_tickets_are_checked() {
         GpuDetectorOptions {
             ring: 1,
             profile: false,
+            ..Default::default()
         },
     )
     .unwrap()
@@ -1312,6 +1316,7 @@ fn a_stale_ticket_does_not_redeem_another_frame() {
         GpuDetectorOptions {
             ring: 1,
             profile: false,
+            ..Default::default()
         },
     )
     .unwrap();

@@ -3,7 +3,7 @@
 
 use super::kernel::DYNAMIC_STRIDE;
 use super::kernel::init_buffer;
-use super::layout::{FrameLayout, MAX_LEVELS, MAX_WINDOWS_PER_AXIS};
+use super::layout::{FrameLayout, MAX_LEVELS, MAX_WINDOWS_PER_AXIS, TILE_ROW};
 use crate::config::Config;
 use crate::cpu::orb::{Pattern, RotatedPatterns};
 use crate::cpu::orientation::AngleBins;
@@ -198,9 +198,10 @@ impl Buffers {
     /// Allocates everything for `width x height` under `cfg` (valid). Fails,
     /// naming the limit, when a buffer would exceed the device's limits.
     pub fn new(device: &wgpu::Device, cfg: &Config, width: u32, height: u32) -> Result<Self> {
-        let layout = FrameLayout::new(cfg, width, height);
-        let allocated = Allocated::of(&layout);
         let limits = device.limits();
+        let mut layout = FrameLayout::new(cfg, width, height);
+        layout.params.tile_row = limits.max_compute_workgroups_per_dimension.clamp(1, TILE_ROW);
+        let allocated = Allocated::of(&layout);
         if layout.total_px_exact > u32::MAX as u64 {
             return Err(Error::GpuLimits {
                 reason: format!(
@@ -226,11 +227,13 @@ impl Buffers {
         let lim = limits.max_compute_workgroups_per_dimension;
         // keypoint passes are dispatched indirectly with ceil(count / 64) groups
         let gk = layout.capacity.div_ceil(64);
-        if gx > lim || gy > lim || gz > lim || gk > lim {
+        // luma and the pyramid dispatch one level's tile grid
+        let [lx, ly, _] = layout.level_groups(0);
+        if gx > lim || gy > lim || gz > lim || gk > lim || lx > lim || ly > lim {
             return Err(Error::GpuLimits {
                 reason: format!(
-                    "a {width}x{height} frame needs {gx}x{gy}x{gz} workgroups per pass and up to {gk} per keypoint pass, \
-                     the device allows {lim} per dimension"
+                    "a {width}x{height} frame needs {lx}x{ly} workgroups per level-0 pass, {gx}x{gy}x{gz} per \
+                     all-level pass and up to {gk} per keypoint pass; the device allows {lim} per dimension"
                 ),
             });
         }
@@ -309,8 +312,9 @@ impl Buffers {
     /// large enough (writing the new `Params` and grid through `queue`), and
     /// returns false, changing nothing, when they are not.
     pub fn relayout(&mut self, queue: &wgpu::Queue, cfg: &Config, width: u32, height: u32) -> bool {
-        let layout = FrameLayout::new(cfg, width, height);
-        if !self.allocated.holds(&Allocated::of(&layout)) {
+        let mut layout = FrameLayout::new(cfg, width, height);
+        layout.params.tile_row = self.layout.params.tile_row;
+        if !self.allocated.holds(&Allocated::of(&layout)) || layout.pixel_groups()[1] > layout.params.tile_row {
             return false;
         }
         // A mask belongs to its frame size: the new size starts without one.

@@ -13,7 +13,7 @@ pub const MAX_LEVELS: usize = 32;
 /// stride `max(1, a/2)` gives L windows for L < 10, L-1 for L < 15, L-2 for
 /// L < 20 (17 at L = 19) and at most 11 from L = 20 on (a test checks every L).
 pub const MAX_WINDOWS_PER_AXIS: usize = 17;
-/// Workgroups per row of the tile list (WebGPU's guaranteed per-dimension limit).
+/// Most workgroups per row of the tile list (WebGPU's guaranteed per-dimension limit).
 pub const TILE_ROW: u32 = 65535;
 /// Side of the 2D workgroups of per-pixel passes.
 pub const TILE: u32 = 16;
@@ -66,8 +66,11 @@ pub struct Params {
     pub max_h: u32,
     /// 16x16 tiles of all levels.
     pub total_tiles: u32,
+    /// Workgroups per row of the tile list: the device's per-dimension limit
+    /// (at most [`TILE_ROW`]); set by `Buffers::new`.
+    pub tile_row: u32,
     /// Padding to 16 bytes.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
 }
 
 /// One level's window grid (SPEC 5), as the CPU reference lays it out.
@@ -181,6 +184,7 @@ impl FrameLayout {
         p.capacity = capacity;
         p.orientation_bins = cfg.orientation_bins;
         p.total_px = total.min(u32::MAX as u64) as u32;
+        p.tile_row = TILE_ROW;
         p.max_w = width;
         p.max_h = height;
         Self {
@@ -207,7 +211,8 @@ impl FrameLayout {
     /// (shaders/common.wgsl `tile_pixel` maps a workgroup to its tile).
     pub fn pixel_groups(&self) -> [u32; 3] {
         let t = self.params.total_tiles;
-        if t <= TILE_ROW { [t, 1, 1] } else { [TILE_ROW, t.div_ceil(TILE_ROW), 1] }
+        let row = self.params.tile_row.max(1);
+        if t <= row { [t, 1, 1] } else { [row, t.div_ceil(row), 1] }
     }
 
     /// Workgroups of a per-pixel pass over level `l` alone.
