@@ -48,7 +48,7 @@ pub fn supports(e: &Plane<u8>, px: i32, py: i32, t: usize, support: u32) -> bool
     n >= support
 }
 
-/// The 16-bit mask of edge pixels on the circle around p (bit i = CIRCLE[i]).
+/// The 16-bit mask of edge pixels on the circle around p (bit i = `CIRCLE[i]`).
 #[inline]
 pub fn circle_mask(e: &Plane<u8>, px: i32, py: i32) -> u32 {
     let w = e.width as isize;

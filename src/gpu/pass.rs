@@ -20,7 +20,7 @@ pub trait Pass: Sized {
     fn prepare(&self, _encoder: &mut wgpu::CommandEncoder, _b: &Buffers) {}
 }
 
-/// How a [`simple_pass!`] stage is dispatched.
+/// How a `simple_pass!` stage is dispatched.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Groups {
     /// Fixed workgroup counts.
