@@ -13,10 +13,12 @@ pub mod config;
 pub mod cpu;
 mod detector;
 pub mod error;
+pub mod eval;
 pub mod image;
 pub mod io;
 mod keypoint;
 pub mod gpu;
+pub mod vo;
 
 pub use config::{Config, Mode};
 pub use detector::{Backend, Detector};

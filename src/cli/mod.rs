@@ -9,9 +9,9 @@
 mod detect;
 mod draw;
 mod edges;
-// [eval module: issue 5]
+mod eval;
 mod info;
-// [vo module: issue 6]
+mod vo;
 mod inputs;
 mod report;
 
@@ -109,8 +109,14 @@ enum Cmd {
         #[arg(long, value_name = "NAME")]
         adapter: Option<String>,
     },
-    // [eval subcommand: issue 5]
-    // [vo and ate subcommands: issue 6]
+    /// Evaluation suites: the paper's experiments and more, as CSV, plots and a report
+    #[command(after_help = eval::AFTER_HELP)]
+    Eval(eval::EvalArgs),
+    /// Monocular visual odometry over a KITTI-format folder, with the ATE when poses exist
+    #[command(after_help = vo::VO_AFTER_HELP)]
+    Vo(vo::VoArgs),
+    /// Absolute trajectory error of a KITTI-format estimate (Umeyama SE(3)/Sim(3), as evo_ape)
+    Ate(vo::AteArgs),
 }
 
 impl Common {
@@ -182,8 +188,9 @@ where
         Cmd::Detect(a) => detect::run(a),
         Cmd::Edges(a) => edges::run(a),
         Cmd::Info { adapter } => info::run(adapter),
-        // [eval dispatch: issue 5]
-        // [vo and ate dispatch: issue 6]
+        Cmd::Eval(a) => eval::run(a),
+        Cmd::Vo(a) => vo::run_vo(a),
+        Cmd::Ate(a) => vo::run_ate(a),
     };
     match r {
         Ok(true) => ExitCode::SUCCESS,

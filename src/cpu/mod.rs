@@ -14,6 +14,7 @@ pub mod histogram;
 pub mod hysteresis;
 pub mod lfast;
 pub mod local_threshold;
+pub mod matcher;
 pub mod median;
 pub mod nms;
 pub mod orb;

@@ -1,5 +1,5 @@
-//! The GPU path: every SPEC stage a WGSL compute pass (shaders/<stage>.wgsl),
-//! mirrored by src/cpu/<stage>.rs, driven through wgpu.
+//! The GPU path: every SPEC stage a WGSL compute pass (`shaders/<stage>.wgsl`),
+//! mirrored by `src/cpu/<stage>.rs`, driven through wgpu.
 //!
 //! - [`GpuContext`]: the device, from the environment or an embedder's.
 //! - [`Buffers`]: every buffer of one frame size, by name.
@@ -19,6 +19,7 @@ pub mod layout;
 pub mod lfast;
 pub mod local_threshold;
 pub mod luma;
+pub mod matcher;
 pub mod median;
 pub mod nms;
 pub mod orb;
@@ -62,5 +63,5 @@ macro_rules! shaders {
 
 shaders!(
     luma, pyramid, median, gradient, nms, histogram, otsu, local_threshold, classify, rules, hysteresis, lfast, response,
-    corner_nms, select, blur, orientation, orb,
+    corner_nms, select, blur, orientation, orb, matcher,
 );
