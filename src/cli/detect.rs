@@ -236,6 +236,8 @@ pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
     let jobs: Vec<Job> =
         mine.iter().map(|i| Job { input: i, outputs: outputs(&a.out.join(&i.rel), &formats, a.draw) }).collect();
 
+    report::log_warnings(a.common.quiet);
+    report::catch_interrupts();
     let mut rep = Reporter::new(jobs.len() as u64, a.common.quiet);
     let threads = pool.current_num_threads().max(1);
     let decoders = (threads / 2).clamp(1, 4);
@@ -250,6 +252,9 @@ pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
             let tx = tx_dec.clone();
             s.spawn(move || {
                 loop {
+                    if report::interrupted() {
+                        break;
+                    }
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(job) = jobs.get(i) else { break };
                     let st = if let Some(p) = &job.input.problem {
@@ -292,6 +297,10 @@ pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
         });
         // stage 3 (this thread): encode, write, report
         for (i, st) in rx_det {
+            // after SIGINT/SIGTERM: the files written so far are complete; stop
+            if report::interrupted() {
+                break;
+            }
             let job = &jobs[i];
             match &st {
                 Stage::Skip => rep.skipped(|| format!("{}: skipped (outputs exist)", job.input.path.display())),
@@ -307,5 +316,7 @@ pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
         }
     });
     let tail = format!("backend {backend}, detector {}, {threads} threads", det.name());
-    Ok(rep.finish("keypoints", &tail))
+    let ok = rep.finish("keypoints", &tail);
+    report::exit_if_interrupted();
+    Ok(ok)
 }

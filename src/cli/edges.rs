@@ -136,6 +136,8 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
             })
             .collect()
     };
+    report::log_warnings(a.common.quiet);
+    report::catch_interrupts();
     let mut rep = Reporter::new(jobs.len() as u64, a.common.quiet);
     let threads = pool.current_num_threads();
     std::thread::scope(|s| {
@@ -144,6 +146,9 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
         s.spawn(move || {
             pool.install(|| {
                 jobs.par_iter().enumerate().for_each_with(tx, |tx, (i, (input, path))| {
+                    if report::interrupted() {
+                        return;
+                    }
                     let r = match &input.problem {
                         Some(p) => Err(p.clone()),
                         None => process(det, input, path, debug).map_err(|e| report::reason(&e)),
@@ -153,6 +158,10 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
             })
         });
         for (i, r) in rx {
+            // after SIGINT/SIGTERM: the files written so far are complete; stop
+            if report::interrupted() {
+                break;
+            }
             let (input, path) = &jobs[i];
             match r.and_then(|(files, n)| write(&files).map(|_| n).map_err(|e| e.to_string())) {
                 Ok(n) => rep.done(n, || format!("{}: {n} edge pixels -> {}", input.path.display(), path.display())),
@@ -160,5 +169,7 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
             }
         }
     });
-    Ok(rep.finish("edge pixels", &format!("backend {backend}, {threads} threads")))
+    let ok = rep.finish("edge pixels", &format!("backend {backend}, {threads} threads"));
+    report::exit_if_interrupted();
+    Ok(ok)
 }

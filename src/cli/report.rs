@@ -70,6 +70,8 @@ impl Reporter {
     /// A file failed: one line on stderr naming it and the reason.
     pub fn failed(&mut self, path: &Path, reason: &str) {
         self.counts.failed += 1;
+        // one line per file, whatever the decoder's message holds (zune-jpeg's end in '\n')
+        let reason = reason.split_whitespace().collect::<Vec<_>>().join(" ");
         let line = format!("lfast: {}: {reason}", path.display());
         match &self.bar {
             Some(b) => {
@@ -98,6 +100,82 @@ impl Reporter {
             c.items
         );
         c.failed == 0
+    }
+}
+
+/// The signal that interrupted the batch (SIGINT, SIGTERM), 0 while none did.
+static INTERRUPTED: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(0);
+
+#[cfg(unix)]
+extern "C" fn on_interrupt(sig: libc::c_int) {
+    // Only async-signal-safe work here: note the signal and restore the
+    // default action, so a second Ctrl-C ends the process at once.
+    INTERRUPTED.store(sig, std::sync::atomic::Ordering::SeqCst);
+    // SAFETY: signal() is async-signal-safe; SIG_DFL is a valid action.
+    unsafe {
+        libc::signal(sig, libc::SIG_DFL);
+    }
+}
+
+/// Makes SIGINT and SIGTERM stop a batch between files instead of killing it
+/// in the middle of writing one: no file is taken after the signal, the file
+/// being written is completed, its temporary files are renamed, the summary is
+/// printed, and [`exit_if_interrupted`] then ends the process by the signal.
+pub fn catch_interrupts() {
+    #[cfg(unix)]
+    // SAFETY: the handler only stores to an atomic and calls signal().
+    unsafe {
+        let h = on_interrupt as extern "C" fn(libc::c_int) as libc::sighandler_t;
+        libc::signal(libc::SIGINT, h);
+        libc::signal(libc::SIGTERM, h);
+    }
+}
+
+/// Whether SIGINT or SIGTERM arrived since [`catch_interrupts`].
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst) != 0
+}
+
+/// After an interrupted batch has printed its summary: a note on stderr, then
+/// the signal again with its default action, so the parent (a shell loop, a
+/// job runner) sees the process ended by it. Returns when nothing interrupted.
+pub fn exit_if_interrupted() {
+    let sig = INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst);
+    if sig == 0 {
+        return;
+    }
+    eprintln!("lfast: interrupted; finished files are complete, rerun with --skip-existing to do the rest");
+    #[cfg(unix)]
+    // SAFETY: restoring the default action and raising a signal are plain libc calls.
+    unsafe {
+        libc::signal(sig, libc::SIG_DFL);
+        libc::raise(sig);
+    }
+    std::process::exit(130);
+}
+
+/// Prints lfast's own warnings (`log` records whose target starts with
+/// `lfast`, such as a frame the GPU cannot take running on the CPU) on stderr
+/// as `lfast: warning: ...`; other crates' records are dropped.
+struct Warnings;
+
+impl log::Log for Warnings {
+    fn enabled(&self, m: &log::Metadata) -> bool {
+        m.level() <= log::Level::Warn && m.target().starts_with("lfast")
+    }
+    fn log(&self, r: &log::Record) {
+        if self.enabled(r.metadata()) {
+            eprintln!("lfast: warning: {}", r.args());
+        }
+    }
+    fn flush(&self) {}
+}
+
+/// Installs the stderr logger of lfast's warnings (unless `quiet`); a no-op
+/// when a logger is already installed.
+pub fn log_warnings(quiet: bool) {
+    if !quiet && log::set_logger(&Warnings).is_ok() {
+        log::set_max_level(log::LevelFilter::Warn);
     }
 }
 
