@@ -126,6 +126,26 @@ fn has_run(data: &[u8], centre: usize, pixel: &[isize; N], pass: impl Fn(i32) ->
     false
 }
 
+/// The `--detector fast` front end: FAST-9 with non-maximum suppression,
+/// the `cap` strongest kept (0 = all), described by `describe` (ORB descriptors
+/// of the caller-supplied keypoints).
+pub fn fast9_and_compute(
+    image: &Plane<u8>,
+    threshold: i32,
+    cap: u32,
+    describe: &crate::cpu::CpuDetector,
+) -> crate::Result<(Vec<KeyPoint>, Vec<crate::Descriptor>)> {
+    image.view().check()?;
+    let mut kps = fast9(image, threshold, true);
+    if cap > 0 {
+        kps.sort_by(|a, b| b.response.total_cmp(&a.response));
+        kps.truncate(cap as usize);
+    }
+    let desc = describe.compute(image.view(), &kps)?;
+    Ok((kps, desc))
+}
+
+
 /// FAST-9 corners of `image`, exactly as OpenCV's
 /// `cv::FAST(image, keypoints, threshold, nonmax, FastFeatureDetector::TYPE_9_16)`:
 /// same keypoints, same order (row by row, left to right).

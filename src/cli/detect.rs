@@ -6,7 +6,7 @@
 use super::inputs::{self, Input, Shard};
 use super::report::{self, Reporter};
 use super::{CliError, Common};
-use crate::baseline::fast::fast9;
+use crate::baseline::fast::fast9_and_compute;
 use crate::baseline::orb::{OrbDetector, OrbParams};
 use crate::config::Config;
 use crate::cpu::CpuDetector;
@@ -134,14 +134,7 @@ impl Det {
             Det::Lfast(d) => d.detect_and_compute(img.view(), None),
             Det::Orb(d) => d.detect_and_compute(img.view()),
             Det::Fast { describe, threshold, cap } => {
-                img.view().check()?;
-                let mut kps = fast9(img, *threshold, true);
-                if *cap > 0 {
-                    kps.sort_by(|a, b| b.response.total_cmp(&a.response));
-                    kps.truncate(*cap as usize);
-                }
-                let desc = describe.compute(img.view(), &kps)?;
-                Ok((kps, desc))
+                fast9_and_compute(img, *threshold, *cap, describe)
             }
         }
     }

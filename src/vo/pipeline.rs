@@ -4,7 +4,7 @@
 use super::geometry::{self, Point, RansacOptions};
 use super::kitti::{self, Calib};
 use super::{Pose, VoError};
-use crate::baseline::fast::fast9;
+use crate::baseline::fast::fast9_and_compute;
 use crate::baseline::orb::{OrbDetector, OrbParams};
 use crate::config::Config;
 use crate::cpu::CpuDetector;
@@ -204,14 +204,7 @@ impl Features {
             Features::Lfast(d) => d.detect_and_compute(img.view(), None),
             Features::Orb(d) => d.detect_and_compute(img.view()),
             Features::Fast { describe, threshold, cap } => {
-                img.view().check()?;
-                let mut kps = fast9(img, *threshold, true);
-                if *cap > 0 {
-                    kps.sort_by(|a, b| b.response.total_cmp(&a.response));
-                    kps.truncate(*cap as usize);
-                }
-                let desc = describe.compute(img.view(), &kps)?;
-                Ok((kps, desc))
+                fast9_and_compute(img, *threshold, *cap, describe)
             }
         }
     }
