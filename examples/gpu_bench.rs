@@ -6,6 +6,7 @@
 //! cargo run --release --example gpu_bench -- ../shared/data/kitti/seq01_000000-000050/image_0 --frames 50
 //! ```
 //! Options: `--frames N` (default 30), `--ring R` (frames in flight, default 3),
+//! `--size WxH` (resize every frame first, bilinear: e.g. 1920x1080 from KITTI),
 //! `--json FILE` (machine-readable results).
 
 use lfast::gpu::detector::{GpuDetector, GpuDetectorOptions, GpuInput, STAGES};
@@ -22,15 +23,27 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
+/// `p` resized to `w` x `h` (bilinear, the image crate's Triangle filter).
+fn resize(p: &Plane<u8>, w: u32, h: u32) -> Result<Plane<u8>, Box<dyn std::error::Error>> {
+    let src = image::GrayImage::from_raw(p.width, p.height, p.data.clone()).ok_or("frame size")?;
+    let dst = image::imageops::resize(&src, w, h, image::imageops::FilterType::Triangle);
+    Ok(Plane { width: w, height: h, data: dst.into_raw() })
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let mut inputs = Vec::new();
-    let (mut frames, mut ring, mut json) = (30usize, 3usize, None::<String>);
+    let (mut frames, mut ring, mut json, mut size) = (30usize, 3usize, None::<String>, None::<(u32, u32)>);
     while let Some(a) = args.next() {
         match a.as_str() {
             "--frames" => frames = args.next().ok_or("--frames N")?.parse()?,
             "--ring" => ring = args.next().ok_or("--ring R")?.parse()?,
             "--json" => json = Some(args.next().ok_or("--json FILE")?),
+            "--size" => {
+                let v = args.next().ok_or("--size WxH")?;
+                let (w, h) = v.split_once('x').ok_or("--size WxH, e.g. 1920x1080")?;
+                size = Some((w.parse()?, h.parse()?));
+            }
             _ => inputs.push(std::path::PathBuf::from(a)),
         }
     }
@@ -47,7 +60,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if paths.is_empty() {
         return Err("give image files or a directory of PNGs".into());
     }
-    let imgs: Vec<Plane<u8>> = paths.iter().take(frames.max(1)).map(lfast::image::load_gray).collect::<Result<_, _>>()?;
+    let mut imgs: Vec<Plane<u8>> =
+        paths.iter().take(frames.max(1)).map(lfast::image::load_gray).collect::<Result<_, _>>()?;
+    if let Some((w, h)) = size {
+        imgs = imgs.iter().map(|p| resize(p, w, h)).collect::<Result<_, _>>()?;
+    }
     let (w, h) = (imgs[0].width, imgs[0].height);
     if imgs.iter().any(|i| (i.width, i.height) != (w, h)) {
         return Err("all frames must have the same size".into());

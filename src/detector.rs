@@ -13,10 +13,13 @@ use std::sync::Mutex;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Backend {
-    /// The GPU when an adapter opens, else the CPU with a logged warning.
+    /// A hardware GPU (discrete, integrated or virtual) when one opens, or the
+    /// adapter named by `WGPU_ADAPTER_NAME` / [`GpuOptions::adapter_name`];
+    /// else the CPU, with a logged warning. Never a software adapter
+    /// (lavapipe, WARP, SwiftShader) unless named: the CPU path is faster.
     #[default]
     Auto,
-    /// The GPU or an error.
+    /// The GPU or an error: any adapter, software ones included.
     Gpu,
     /// The CPU reference path.
     Cpu,
@@ -78,7 +81,7 @@ impl Detector {
         let gpu = match backend {
             Backend::Cpu => None,
             Backend::Gpu => Some(GpuContext::new(opts).and_then(|ctx| GpuDetector::new(ctx, cfg))?),
-            Backend::Auto => match GpuContext::new(opts).and_then(|ctx| GpuDetector::new(ctx, cfg)) {
+            Backend::Auto => match GpuContext::new_auto(opts).and_then(|ctx| GpuDetector::new(ctx, cfg)) {
                 Ok(d) => Some(d),
                 Err(e) => {
                     log::warn!("GPU unavailable ({e}); using the CPU path");

@@ -272,7 +272,7 @@ fn backends_and_adapters() {
     if lfast::gpu::testing::context().is_none() {
         return;
     }
-    assert!(s.contains("backend in use: gpu"), "{s}");
+    assert!(s.contains("--backend gpu opens: ") && s.contains("--backend auto uses: gpu on"), "{s}");
     let gpu_out = tmp.path().join("gpu");
     let o = lfast(&[&"detect", &img, &"--out", &gpu_out, &"--backend", &"gpu"]);
     assert!(o.status.success(), "{}", show(&o));

@@ -1,7 +1,7 @@
 //! `lfast info`: GPU adapters, the one chosen and its limits, the CPU fallback.
 
 use super::CliError;
-use crate::gpu::{GpuContext, GpuOptions, list_adapters};
+use crate::gpu::{AutoChoice, GpuContext, GpuOptions, auto_choice, is_hardware, list_adapters};
 
 /// Prints what this machine offers; `adapter` as `--adapter`.
 pub(super) fn run(adapter: Option<String>) -> Result<bool, CliError> {
@@ -12,12 +12,22 @@ pub(super) fn run(adapter: Option<String>) -> Result<bool, CliError> {
     let all = list_adapters(&opts);
     println!("GPU adapters found: {}", all.len());
     for a in &all {
-        println!("  - {} ({:?}, {:?}, driver {} {})", a.name, a.backend, a.device_type, a.driver, a.driver_info);
+        let kind = if is_hardware(a) { "hardware" } else { "software or unknown: never taken by auto unless named" };
+        println!("  - {} ({:?}, {:?}, {kind}, driver {} {})", a.name, a.backend, a.device_type, a.driver, a.driver_info);
+    }
+    match auto_choice(&opts) {
+        AutoChoice::Gpu { info, named: true } => {
+            println!("--backend auto uses: gpu on {} (named by --adapter or WGPU_ADAPTER_NAME)", info.name)
+        }
+        AutoChoice::Gpu { info, named: false } => {
+            println!("--backend auto uses: gpu on {} ({:?}, the best hardware adapter)", info.name, info.device_type)
+        }
+        AutoChoice::Cpu(why) => println!("--backend auto uses: cpu ({why})"),
     }
     match GpuContext::new(&opts) {
         Ok(ctx) => {
             let l = ctx.device.limits();
-            println!("GPU chosen: {} ({:?})", ctx.info.name, ctx.info.backend);
+            println!("--backend gpu opens: {} ({:?}, {:?})", ctx.info.name, ctx.info.backend, ctx.info.device_type);
             println!(
                 "  limits: max buffer {} MiB, storage binding {} MiB, workgroups per dimension {}, invocations per workgroup {}",
                 l.max_buffer_size >> 20,
@@ -26,12 +36,8 @@ pub(super) fn run(adapter: Option<String>) -> Result<bool, CliError> {
                 l.max_compute_invocations_per_workgroup
             );
             println!("  per-pass timestamps: {}", if ctx.has_timestamps() { "yes" } else { "no" });
-            println!("backend in use: gpu (--backend auto and gpu); --backend cpu runs the CPU reference path");
         }
-        Err(e) => {
-            println!("GPU chosen: none ({e})");
-            println!("backend in use: cpu (--backend auto falls back to the CPU; --backend gpu exits with code 2)");
-        }
+        Err(e) => println!("--backend gpu opens: none ({e}); it exits with code 2"),
     }
     println!("rayon threads: {}", rayon::current_num_threads());
     println!("CPU features: {}", cpu_features());

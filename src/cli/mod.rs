@@ -80,7 +80,8 @@ struct Common {
     /// Local-threshold spread alpha, in hundredths
     #[arg(long)]
     alpha_pct: Option<u32>,
-    /// Backend: auto (GPU if an adapter opens, else CPU), gpu or cpu
+    /// Backend: auto (a hardware GPU, or the adapter --adapter names; else the CPU), gpu (any
+    /// adapter, software ones included) or cpu
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     backend: Backend,
     /// GPU adapter: a case-insensitive part of its name (default: $WGPU_ADAPTER_NAME, else the
@@ -154,7 +155,7 @@ impl Common {
         let (backend, opts) = self.backend()?;
         let det = crate::Detector::with_gpu_options(cfg, backend, &opts)?;
         if backend == crate::Backend::Auto && det.backend_name() == "cpu" && !self.quiet {
-            eprintln!("lfast: note: no usable GPU adapter, running on the CPU (see `lfast info`)");
+            eprintln!("lfast: note: no hardware GPU adapter, running on the CPU (see `lfast info`)");
         }
         Ok(det)
     }

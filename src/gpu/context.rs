@@ -6,22 +6,93 @@ use crate::error::{Error, Result};
 use std::sync::{Arc, Mutex};
 
 /// How to pick an adapter. `Default` reads the environment.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct GpuOptions {
     /// Backends to consider; `None` = `WGPU_BACKEND` if set, else the primary
     /// ones (Vulkan, Metal, DX12; GL only when asked for).
     pub backends: Option<wgpu::Backends>,
     /// Case-insensitive substring of the adapter name; `None` = `WGPU_ADAPTER_NAME` if set.
+    /// A name is an explicit request: it may select a software adapter.
     pub adapter_name: Option<String>,
+    /// Read `WGPU_BACKEND` / `WGPU_ADAPTER_NAME` / `WGPU_POWER_PREF` for what
+    /// is left `None` above (default `true`).
+    pub read_env: bool,
+}
+
+impl Default for GpuOptions {
+    fn default() -> Self {
+        Self { backends: None, adapter_name: None, read_env: true }
+    }
 }
 
 impl GpuOptions {
-    fn backends(&self) -> wgpu::Backends {
-        self.backends.unwrap_or_else(|| wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY))
+    /// Options that ignore the environment: the primary backends, no adapter name.
+    pub fn ignoring_env() -> Self {
+        Self { read_env: false, ..Self::default() }
     }
 
-    fn name(&self) -> Option<String> {
-        self.adapter_name.clone().or_else(|| std::env::var("WGPU_ADAPTER_NAME").ok()).filter(|s| !s.is_empty())
+    fn backends(&self) -> wgpu::Backends {
+        let env = if self.read_env { wgpu::Backends::from_env() } else { None };
+        self.backends.or(env).unwrap_or(wgpu::Backends::PRIMARY)
+    }
+
+    /// The adapter asked for by name (these options, else `WGPU_ADAPTER_NAME`).
+    pub fn name(&self) -> Option<String> {
+        let env = || if self.read_env { std::env::var("WGPU_ADAPTER_NAME").ok() } else { None };
+        self.adapter_name.clone().or_else(env).filter(|s| !s.is_empty())
+    }
+
+    fn power(&self) -> wgpu::PowerPreference {
+        let env = if self.read_env { wgpu::PowerPreference::from_env() } else { None };
+        env.unwrap_or(wgpu::PowerPreference::HighPerformance)
+    }
+}
+
+/// True for a software rasteriser (Mesa lavapipe/llvmpipe, WARP, SwiftShader):
+/// wgpu reports `DeviceType::Cpu`; the names catch drivers that misreport it.
+pub fn is_software(info: &wgpu::AdapterInfo) -> bool {
+    let n = info.name.to_lowercase();
+    info.device_type == wgpu::DeviceType::Cpu
+        || ["llvmpipe", "lavapipe", "swiftshader", "microsoft basic render driver", "warp"]
+            .iter()
+            .any(|s| n.contains(s))
+}
+
+/// True for an adapter `Backend::Auto` may take on its own: a discrete,
+/// integrated or virtual GPU, never a software rasteriser (the CPU path is
+/// faster than any of them) nor an adapter of unknown type.
+pub fn is_hardware(info: &wgpu::AdapterInfo) -> bool {
+    matches!(
+        info.device_type,
+        wgpu::DeviceType::DiscreteGpu | wgpu::DeviceType::IntegratedGpu | wgpu::DeviceType::VirtualGpu
+    ) && !is_software(info)
+}
+
+/// What `Backend::Auto` does on this machine with these options, and why.
+#[derive(Clone, Debug)]
+pub enum AutoChoice {
+    /// The GPU path on this adapter: named by the options or the environment
+    /// (`named`, software allowed), or the best hardware adapter.
+    Gpu {
+        /// The adapter.
+        info: wgpu::AdapterInfo,
+        /// True when it was chosen by name.
+        named: bool,
+    },
+    /// The CPU path, for this reason.
+    Cpu(String),
+}
+
+/// Ranks hardware adapters for `Backend::Auto`: by the power preference
+/// (discrete first for high performance, integrated first for low power),
+/// then virtual GPUs; ties keep the enumeration order.
+fn rank(info: &wgpu::AdapterInfo, power: wgpu::PowerPreference) -> u8 {
+    use wgpu::DeviceType::*;
+    match (info.device_type, power) {
+        (IntegratedGpu, wgpu::PowerPreference::LowPower) => 0,
+        (DiscreteGpu, _) => 1,
+        (IntegratedGpu, _) => 2,
+        _ => 3,
     }
 }
 
@@ -43,6 +114,47 @@ fn instance(opts: &GpuOptions) -> wgpu::Instance {
     wgpu::Instance::new(desc)
 }
 
+async fn named_adapter(inst: &wgpu::Instance, opts: &GpuOptions, name: &str) -> Result<wgpu::Adapter> {
+    let all = inst.enumerate_adapters(opts.backends()).await;
+    let names: Vec<String> = all.iter().map(|a| a.get_info().name).collect();
+    let want = name.to_lowercase();
+    all.into_iter()
+        .find(|a| a.get_info().name.to_lowercase().contains(&want))
+        .ok_or_else(|| Error::NoAdapter { reason: format!("none named like `{name}` among {names:?}") })
+}
+
+fn no_hardware_reason(infos: &[wgpu::AdapterInfo]) -> String {
+    let soft: Vec<String> =
+        infos.iter().filter(|i| !is_hardware(i)).map(|i| format!("{} ({:?})", i.name, i.device_type)).collect();
+    if soft.is_empty() {
+        "no GPU adapter found".into()
+    } else {
+        format!(
+            "no hardware GPU adapter; only {}, which the CPU path outruns (name one with --adapter or \
+             WGPU_ADAPTER_NAME, or use --backend gpu, to run on it anyway)",
+            soft.join(", ")
+        )
+    }
+}
+
+/// What `Backend::Auto` would do with these options (for `lfast info`); opens nothing.
+pub fn auto_choice(opts: &GpuOptions) -> AutoChoice {
+    let infos = list_adapters(opts);
+    if let Some(name) = opts.name() {
+        let want = name.to_lowercase();
+        return match infos.into_iter().find(|i| i.name.to_lowercase().contains(&want)) {
+            Some(info) => AutoChoice::Gpu { info, named: true },
+            None => AutoChoice::Cpu(format!("no adapter named like `{name}`")),
+        };
+    }
+    let power = opts.power();
+    let best = infos.iter().filter(|i| is_hardware(i)).min_by_key(|i| rank(i, power)).cloned();
+    match best {
+        Some(info) => AutoChoice::Gpu { info, named: false },
+        None => AutoChoice::Cpu(no_hardware_reason(&infos)),
+    }
+}
+
 /// Every adapter the options' backends expose (for `lfast info`).
 pub fn list_adapters(opts: &GpuOptions) -> Vec<wgpu::AdapterInfo> {
     pollster::block_on(instance(opts).enumerate_adapters(opts.backends())).iter().map(|a| a.get_info()).collect()
@@ -54,26 +166,49 @@ impl GpuContext {
         pollster::block_on(Self::new_async(opts))
     }
 
-    /// Opens the adapter the options (or the environment) select.
+    /// Opens the adapter the options (or the environment) select: the named
+    /// one, else wgpu's choice for the power preference, which may be a
+    /// software adapter. This is the explicit request (`Backend::Gpu`); see
+    /// [`new_auto`](Self::new_auto) for `Backend::Auto`.
     pub async fn new_async(opts: &GpuOptions) -> Result<Self> {
         let inst = instance(opts);
         let adapter = match opts.name() {
-            Some(name) => {
-                let all = inst.enumerate_adapters(opts.backends()).await;
-                let names: Vec<String> = all.iter().map(|a| a.get_info().name).collect();
-                let want = name.to_lowercase();
-                all.into_iter().find(|a| a.get_info().name.to_lowercase().contains(&want)).ok_or_else(|| {
-                    Error::NoAdapter { reason: format!("none named like `{name}` among {names:?}") }
-                })?
-            }
+            Some(name) => named_adapter(&inst, opts, &name).await?,
             None => inst
                 .request_adapter(&wgpu::RequestAdapterOptions {
-                    power_preference: wgpu::PowerPreference::from_env().unwrap_or(wgpu::PowerPreference::HighPerformance),
+                    power_preference: opts.power(),
                     ..Default::default()
                 })
                 .await
                 .map_err(|e| Error::NoAdapter { reason: e.to_string() })?,
         };
+        Self::open(adapter).await
+    }
+
+    /// The context `Backend::Auto` runs on: the adapter named by the options
+    /// or `WGPU_ADAPTER_NAME` (any type: naming one is asking for it), else
+    /// the best hardware adapter. A software adapter is never taken unnamed:
+    /// `Err(NoAdapter)` then, and the caller runs the CPU path.
+    pub fn new_auto(opts: &GpuOptions) -> Result<Self> {
+        pollster::block_on(async {
+            let inst = instance(opts);
+            let adapter = match opts.name() {
+                Some(name) => named_adapter(&inst, opts, &name).await?,
+                None => {
+                    let all = inst.enumerate_adapters(opts.backends()).await;
+                    let infos: Vec<_> = all.iter().map(|a| a.get_info()).collect();
+                    let best = (0..all.len())
+                        .filter(|&i| is_hardware(&infos[i]))
+                        .min_by_key(|&i| rank(&infos[i], opts.power()))
+                        .ok_or_else(|| Error::NoAdapter { reason: no_hardware_reason(&infos) })?;
+                    all.into_iter().nth(best).ok_or_else(|| Error::NoAdapter { reason: "adapter list changed".into() })?
+                }
+            };
+            Self::open(adapter).await
+        })
+    }
+
+    async fn open(adapter: wgpu::Adapter) -> Result<Self> {
         let info = adapter.get_info();
         // Timestamps are optional: per-pass timings when the adapter has them.
         let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;

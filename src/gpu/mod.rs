@@ -34,7 +34,7 @@ pub mod select;
 pub mod testing;
 
 pub use buffers::{Buffers, GpuKeypoint};
-pub use context::{GpuContext, GpuOptions, list_adapters};
+pub use context::{AutoChoice, GpuContext, GpuOptions, auto_choice, is_hardware, is_software, list_adapters};
 pub use detector::{Frame, GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
 pub use layout::FrameLayout;
 pub use pass::Pass;

@@ -281,7 +281,7 @@ fn gpu_context(o: &VoOptions) -> Result<Option<GpuContext>, VoError> {
     match o.backend {
         Backend::Cpu => Ok(None),
         Backend::Gpu => Ok(Some(GpuContext::new(&o.gpu)?)),
-        Backend::Auto => match GpuContext::new(&o.gpu) {
+        Backend::Auto => match GpuContext::new_auto(&o.gpu) {
             Ok(c) => Ok(Some(c)),
             Err(e) => {
                 log::warn!("GPU unavailable ({e}); detection and matching run on the CPU");
