@@ -71,45 +71,75 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let ctx = GpuContext::new(&GpuOptions::default())?;
     println!("adapter: {} ({:?}), {} frames of {w}x{h}, ring {ring}", ctx.info.name, ctx.info.backend, imgs.len());
-    let det = GpuDetector::with_options(ctx.clone(), Config::default(), GpuDetectorOptions { ring, profile: true, ..Default::default() })?;
-    let mut ws = Some(det.workspace(w, h)?);
+    // per-pass times: a detector that records timestamp queries
+    let prof = GpuDetector::with_options(ctx.clone(), Config::default(), GpuDetectorOptions { ring, profile: true, ..Default::default() })?;
+    let mut pws = Some(prof.workspace(w, h)?);
+    for img in imgs.iter().take(3) {
+        prof.detect_and_compute(&mut pws, img.view(), None)?; // warm-up: compilation, first allocations
+    }
+    let mut per_pass: Vec<Vec<f64>> = vec![Vec::new(); STAGES.len()];
+    let mut gpu_total = Vec::new();
+    for img in &imgs {
+        let f = prof.detect_and_compute(&mut pws, img.view(), None)?;
+        for (i, (_, ms)) in f.pass_ms.iter().enumerate() {
+            per_pass[i].push(*ms);
+        }
+        gpu_total.push(f.pass_ms.iter().map(|p| p.1).sum::<f64>());
+    }
+    drop(pws);
 
-    // warm-up (pipeline compilation, first allocations)
+    // the rest without timestamps, as an application runs it
+    let det = GpuDetector::with_options(ctx.clone(), Config::default(), GpuDetectorOptions { ring, profile: false, ..Default::default() })?;
+    let mut ws = Some(det.workspace(w, h)?);
     for img in imgs.iter().take(3) {
         det.detect_and_compute(&mut ws, img.view(), None)?;
     }
     // latency: one frame at a time, upload to host-side results
     let mut lat = Vec::new();
-    let mut per_pass: Vec<Vec<f64>> = vec![Vec::new(); STAGES.len()];
-    let mut gpu_total = Vec::new();
     let mut kps = 0usize;
     for img in &imgs {
         let t = Instant::now();
         let f = det.detect_and_compute(&mut ws, img.view(), None)?;
         lat.push(t.elapsed().as_secs_f64() * 1e3);
         kps += f.keypoints.len();
-        for (i, (_, ms)) in f.pass_ms.iter().enumerate() {
-            per_pass[i].push(*ms);
-        }
-        gpu_total.push(f.pass_ms.iter().map(|p| p.1).sum::<f64>());
     }
-    // throughput: `ring` frames in flight, each read back a frame or more later
     let ws = ws.as_mut().ok_or("workspace")?;
+    // GPU time per frame with nothing read back: every frame recorded and
+    // submitted back to back, one wait at the end (gaps between passes included)
+    let reps = 4;
+    let mut encode_ms = Vec::new();
+    ctx.wait()?;
+    let t = Instant::now();
+    for _ in 0..reps {
+        for img in &imgs {
+            let te = Instant::now();
+            ws.write_gray(&ctx.queue, img.view())?;
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            det.encode(&mut enc, GpuInput::Written, ws)?;
+            ctx.queue.submit([enc.finish()]);
+            encode_ms.push(te.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    ctx.wait()?;
+    let gpu_only = t.elapsed().as_secs_f64() * 1e3 / (reps * imgs.len()) as f64;
+    // throughput: `ring` frames in flight, each read back a frame or more later
     let t = Instant::now();
     let mut pending = VecDeque::new();
     let mut done = 0usize;
-    for img in &imgs {
-        if pending.len() == ws.ring_len() {
-            det.finish_readback(ws, pending.pop_front().ok_or("ring")?)?;
-            done += 1;
+    for _ in 0..reps {
+        for img in &imgs {
+            if pending.len() == ws.ring_len() {
+                det.finish_readback(ws, pending.pop_front().ok_or("ring")?)?;
+                done += 1;
+            }
+            ws.write_gray(&ctx.queue, img.view())?;
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            det.encode(&mut enc, GpuInput::Written, ws)?;
+            let tk = det.encode_readback(&mut enc, ws)?;
+            ctx.queue.submit([enc.finish()]);
+            det.start_readback(ws, tk)?;
+            pending.push_back(tk);
         }
-        ws.write_gray(&ctx.queue, img.view())?;
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
-        det.encode(&mut enc, GpuInput::Written, ws)?;
-        let tk = det.encode_readback(&mut enc, ws)?;
-        ctx.queue.submit([enc.finish()]);
-        det.start_readback(ws, tk)?;
-        pending.push_back(tk);
     }
     while let Some(tk) = pending.pop_front() {
         det.finish_readback(ws, tk)?;
@@ -126,14 +156,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let gpu = median(&mut gpu_total);
     let l = median(&mut lat);
+    let enc_ms = median(&mut encode_ms);
     let fps = done as f64 / secs;
     println!("  {:<16} {gpu:9.3} ms", "sum of passes");
     println!("\nlatency upload -> keypoints + descriptors on the host: {l:.3} ms (median)");
+    println!("GPU time per frame, back to back, no readback: {gpu_only:.3} ms");
+    println!("CPU time to record + submit a frame: {enc_ms:.3} ms (median)");
     println!("sustained, {} in flight: {fps:.1} frames/s ({:.3} ms per frame)", ws.ring_len(), 1e3 / fps);
     println!("mean keypoints per frame: {:.1}", kps as f64 / imgs.len() as f64);
     if let Some(p) = json {
         let s = format!(
-            "{{\"adapter\": \"{}\", \"frames\": {}, \"width\": {w}, \"height\": {h}, \"latency_ms\": {l:.4}, \"fps\": {fps:.2}, \"gpu_sum_ms\": {gpu:.4}, \"passes_ms\": {{{}}}}}\n",
+            "{{\"adapter\": \"{}\", \"frames\": {}, \"width\": {w}, \"height\": {h}, \"latency_ms\": {l:.4}, \"gpu_only_ms\": {gpu_only:.4}, \"encode_ms\": {enc_ms:.4}, \"fps\": {fps:.2}, \"gpu_sum_ms\": {gpu:.4}, \"passes_ms\": {{{}}}}}\n",
             ctx.info.name,
             imgs.len(),
             rows.join(", ")

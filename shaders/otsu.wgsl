@@ -1,21 +1,21 @@
 // SPEC 4, second half: Otsu's threshold with exact integer arithmetic, so the
-// GPU picks exactly the k of the CPU. Mirrors src/cpu/otsu.rs.
+// GPU picks exactly the k of the CPU. Mirrors src/cpu/otsu.rs; tests:
+// tests/gpu_edges_front.rs (709 random histograms, ties, 2^28 totals).
 // hist -> otsu[l] = k + 1 (T1), or 0 when the level has no edges (at most one
 // non-empty bin). One workgroup per level (workgroup_id.x), invocation k
 // evaluates the split at k, then a tree reduction keeps the best k.
 //
 // WGSL has no u64/u128, so the numbers of src/cpu/otsu.rs are little-endian
-// u32 limbs. With n <= 2^28 pixels per level (docs/algorithm.md, stage 0):
-// sum = Σ i*h[i] < 2^36, d = |n*s0 - n0*sum| < 2^62, num = d^2 < 2^124,
-// den = n0*n1 < 2^56, and the cross products num*bden < 2^180: every value
-// fits the 192-bit `Wide` below, so all arithmetic here is exact.
+// u32 limbs of fixed width, in straight-line code (no dynamically indexed
+// arrays: those spill to memory on real GPUs). With n <= 2^28 pixels per level
+// (docs/algorithm.md, stage 0): n, n0, n1 < 2^32 (one limb), s0 and sum =
+// Σ i*h[i] < 2^36 (two), n*s0 and n0*sum < 2^64 * 2^28 (three),
+// d = |n*s0 - n0*sum| < 2^62 (two), num = d^2 < 2^124 (four), den = n0*n1
+// < 2^56 (two), and the cross products num*bden < 2^180 (six): all exact.
+// n0 and s0 come from a workgroup prefix sum (Hillis-Steele, 8 steps).
 
 @group(0) @binding(1) var<storage, read> hist: array<u32>;
 @group(0) @binding(2) var<storage, read_write> otsu: array<u32>;
-
-const LIMBS: u32 = 6u;
-// A 192-bit unsigned number, limb 0 least significant.
-alias Wide = array<u32, 6>;
 
 // a * b as a 64-bit (lo, hi) pair, from 16-bit halves.
 fn mul32(a: u32, b: u32) -> vec2<u32> {
@@ -34,76 +34,95 @@ fn mul32(a: u32, b: u32) -> vec2<u32> {
     return vec2(lo, hi);
 }
 
-fn wide(lo: u32, hi: u32) -> Wide {
-    return Wide(lo, hi, 0u, 0u, 0u, 0u);
+// a + b + c as (sum mod 2^32, carry); carry <= 2 for c <= 2.
+fn add3(a: u32, b: u32, c: u32) -> vec2<u32> {
+    let t = a + b;
+    let t2 = t + c;
+    return vec2(t2, select(0u, 1u, t < a) + select(0u, 1u, t2 < t));
 }
 
-// a + b (mod 2^192).
-fn add(a_in: Wide, b_in: Wide) -> Wide {
-    var a = a_in;
-    var b = b_in;
-    var r: Wide;
-    var carry = 0u;
-    for (var i = 0u; i < LIMBS; i++) {
-        let t = a[i] + b[i];
-        let c1 = select(0u, 1u, t < a[i]);
-        let t2 = t + carry;
-        let c2 = select(0u, 1u, t2 < t);
-        r[i] = t2;
-        carry = c1 + c2;
-    }
-    return r;
+// 64-bit a + b (mod 2^64).
+fn add64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
+    let lo = add3(a.x, b.x, 0u);
+    return vec2(lo.x, a.y + b.y + lo.y);
 }
 
-// a - b for a >= b.
-fn sub(a_in: Wide, b_in: Wide) -> Wide {
-    var a = a_in;
-    var b = b_in;
-    var r: Wide;
-    var borrow = 0u;
-    for (var i = 0u; i < LIMBS; i++) {
-        let t = a[i] - b[i];
-        let b1 = select(0u, 1u, a[i] < b[i]);
-        let t2 = t - borrow;
-        let b2 = select(0u, 1u, t < borrow);
-        r[i] = t2;
-        borrow = b1 + b2;
-    }
-    return r;
+// a * b, a 32-bit, b 64-bit: 96 bits.
+fn mul_32x64(a: u32, b: vec2<u32>) -> vec3<u32> {
+    let p0 = mul32(a, b.x);
+    let p1 = mul32(a, b.y);
+    let r1 = add3(p0.y, p1.x, 0u);
+    return vec3(p0.x, r1.x, p1.y + r1.y);
 }
 
-// a * b (mod 2^192), schoolbook. Each step adds r + p + carry < 2^64.
-fn mul(a_in: Wide, b_in: Wide) -> Wide {
-    var a = a_in;
-    var b = b_in;
-    var r: Wide;
-    for (var i = 0u; i < LIMBS; i++) {
-        var carry = 0u;
-        for (var j = 0u; i + j < LIMBS; j++) {
-            let p = mul32(a[i], b[j]);
-            let t = r[i + j] + p.x;
-            let c1 = select(0u, 1u, t < p.x);
-            let t2 = t + carry;
-            let c2 = select(0u, 1u, t2 < t);
-            r[i + j] = t2;
-            carry = p.y + c1 + c2;
-        }
-    }
-    return r;
-}
-
-// -1, 0, 1 as a <, ==, > b.
-fn cmp(a_in: Wide, b_in: Wide) -> i32 {
-    var a = a_in;
-    var b = b_in;
-    for (var i = 0; i < i32(LIMBS); i++) {
-        let k = LIMBS - 1u - u32(i);
-        if (a[k] != b[k]) { return select(-1, 1, a[k] > b[k]); }
-    }
+// -1, 0, 1 as a <, ==, > b (96 bits).
+fn cmp96(a: vec3<u32>, b: vec3<u32>) -> i32 {
+    if (a.z != b.z) { return select(-1, 1, a.z > b.z); }
+    if (a.y != b.y) { return select(-1, 1, a.y > b.y); }
+    if (a.x != b.x) { return select(-1, 1, a.x > b.x); }
     return 0;
 }
 
-var<workgroup> h: array<u32, 256>;
+// a - b for a >= b (96 bits).
+fn sub96(a: vec3<u32>, b: vec3<u32>) -> vec3<u32> {
+    let b0 = select(0u, 1u, a.x < b.x);
+    let y = a.y - b.y - b0;
+    let b1 = select(0u, 1u, a.y < b.y || (a.y == b.y && b0 == 1u));
+    return vec3(a.x - b.x, y, a.z - b.z - b1);
+}
+
+// a * b, both 64-bit: 128 bits.
+fn mul_64x64(a: vec2<u32>, b: vec2<u32>) -> vec4<u32> {
+    let p00 = mul32(a.x, b.x);
+    let p01 = mul32(a.x, b.y);
+    let p10 = mul32(a.y, b.x);
+    let p11 = mul32(a.y, b.y);
+    let r1a = add3(p00.y, p01.x, 0u);
+    let r1 = add3(r1a.x, p10.x, 0u);
+    let r2a = add3(p01.y, p10.y, r1a.y + r1.y);
+    let r2 = add3(r2a.x, p11.x, 0u);
+    return vec4(p00.x, r1.x, r2.x, p11.y + r2a.y + r2.y);
+}
+
+// a * b, a 128-bit, b 32-bit: 160 bits as (low 128, high 32).
+struct U160 { lo: vec4<u32>, hi: u32 }
+
+fn mul_128x32(a: vec4<u32>, b: u32) -> U160 {
+    let p0 = mul32(a.x, b);
+    let p1 = mul32(a.y, b);
+    let p2 = mul32(a.z, b);
+    let p3 = mul32(a.w, b);
+    let r1 = add3(p0.y, p1.x, 0u);
+    let r2 = add3(p1.y, p2.x, r1.y);
+    let r3 = add3(p2.y, p3.x, r2.y);
+    return U160(vec4(p0.x, r1.x, r2.x, r3.x), p3.y + r3.y);
+}
+
+// a * b, a 128-bit, b 64-bit: 192 bits as (low 96, high 96).
+struct U192 { lo: vec3<u32>, hi: vec3<u32> }
+
+fn mul_128x64(a: vec4<u32>, b: vec2<u32>) -> U192 {
+    // a*b.x + (a*b.y << 32)
+    let x = mul_128x32(a, b.x);
+    let y = mul_128x32(a, b.y);
+    let r1 = add3(x.lo.y, y.lo.x, 0u);
+    let r2 = add3(x.lo.z, y.lo.y, r1.y);
+    let r3 = add3(x.lo.w, y.lo.z, r2.y);
+    let r4 = add3(x.hi, y.lo.w, r3.y);
+    let r5 = y.hi + r4.y;
+    return U192(vec3(x.lo.x, r1.x, r2.x), vec3(r3.x, r4.x, r5));
+}
+
+// -1, 0, 1 as a <, ==, > b (192 bits).
+fn cmp192(a: U192, b: U192) -> i32 {
+    let c = cmp96(a.hi, b.hi);
+    if (c != 0) { return c; }
+    return cmp96(a.lo, b.lo);
+}
+
+// The prefix sums: counts (n0) and moments (s0, 64-bit) of bins 0..=k.
+var<workgroup> scan_n: array<u32, 256>;
+var<workgroup> scan_s: array<vec2<u32>, 256>;
 // Per slot of the reduction: the candidate's k (NO_K = none), num (4 limbs), den (2 limbs).
 var<workgroup> red_k: array<u32, 256>;
 var<workgroup> red_num: array<vec4<u32>, 256>;
@@ -117,13 +136,7 @@ const NO_K: u32 = 0xffffffffu;
 fn beats(j: u32, i: u32) -> bool {
     if (red_k[j] == NO_K) { return false; }
     if (red_k[i] == NO_K) { return true; }
-    let nj = red_num[j];
-    let ni = red_num[i];
-    let dj = red_den[j];
-    let di = red_den[i];
-    let lhs = mul(Wide(nj.x, nj.y, nj.z, nj.w, 0u, 0u), wide(di.x, di.y));
-    let rhs = mul(Wide(ni.x, ni.y, ni.z, ni.w, 0u, 0u), wide(dj.x, dj.y));
-    let c = cmp(lhs, rhs);
+    let c = cmp192(mul_128x64(red_num[j], red_den[i]), mul_128x64(red_num[i], red_den[j]));
     return c > 0 || (c == 0 && red_k[j] < red_k[i]);
 }
 
@@ -131,44 +144,45 @@ fn beats(j: u32, i: u32) -> bool {
 fn main(@builtin(local_invocation_index) k: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let l = wg.x;
     if (l >= P.n_levels) { return; }
-    h[k] = hist[l * 256u + k];
+    let hk = hist[l * 256u + k];
+    scan_n[k] = hk;
+    scan_s[k] = mul32(k, hk);
     workgroupBarrier();
-
-    // n, sum over all bins and n0, s0 over bins 0..=k (each invocation sums
-    // its own prefix: 256 steps, no scan to get wrong).
-    var n = wide(0u, 0u);
-    var sum = wide(0u, 0u);
-    var n0 = wide(0u, 0u);
-    var s0 = wide(0u, 0u);
-    for (var i = 0u; i < 256u; i++) {
-        let c = wide(h[i], 0u);
-        let ic = mul32(i, h[i]);
-        n = add(n, c);
-        sum = add(sum, wide(ic.x, ic.y));
-        if (i <= k) {
-            n0 = add(n0, c);
-            s0 = add(s0, wide(ic.x, ic.y));
+    // inclusive prefix sums: no carry out of 32 bits for n (<= 2^28) nor of 64 for s
+    for (var off = 1u; off < 256u; off <<= 1u) {
+        var vn = scan_n[k];
+        var vs = scan_s[k];
+        if (k >= off) {
+            vn += scan_n[k - off];
+            vs = add64(vs, scan_s[k - off]);
         }
+        workgroupBarrier();
+        scan_n[k] = vn;
+        scan_s[k] = vs;
+        workgroupBarrier();
     }
-    let n1 = sub(n, n0);
-    let zero = wide(0u, 0u);
+    let n = scan_n[255];
+    let sum = scan_s[255];
+    let n0 = scan_n[k];
+    let s0 = scan_s[k];
+    let n1 = n - n0;
     // k runs over 0..255 (exclusive) on the CPU; 255 always has n1 == 0.
     var my_k = NO_K;
-    var num = zero;
-    var den = zero;
-    if (k < 255u && cmp(n0, zero) != 0 && cmp(n1, zero) != 0) {
-        // d = |n*s0 - n0*sum|, num = d^2, den = n0*n1
-        let p = mul(n, s0);
-        let q = mul(n0, sum);
-        var d: Wide;
-        if (cmp(p, q) >= 0) { d = sub(p, q); } else { d = sub(q, p); }
-        num = mul(d, d);
-        den = mul(n0, n1);
+    var num = vec4(0u);
+    var den = vec2(0u);
+    if (k < 255u && n0 != 0u && n1 != 0u) {
+        // d = |n*s0 - n0*sum| < 2^62, num = d^2, den = n0*n1
+        let p = mul_32x64(n, s0);
+        let q = mul_32x64(n0, sum);
+        var d: vec3<u32>;
+        if (cmp96(p, q) >= 0) { d = sub96(p, q); } else { d = sub96(q, p); }
+        num = mul_64x64(d.xy, d.xy);
+        den = mul32(n0, n1);
         my_k = k;
     }
     red_k[k] = my_k;
-    red_num[k] = vec4(num[0], num[1], num[2], num[3]);
-    red_den[k] = vec2(den[0], den[1]);
+    red_num[k] = num;
+    red_den[k] = den;
     workgroupBarrier();
 
     for (var stride = 128u; stride > 0u; stride >>= 1u) {
