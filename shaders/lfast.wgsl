@@ -1,7 +1,8 @@
 // SPEC 8: the L-FAST corner test on the edge map (paper 3.2, Steps 1-5).
 // Mirrors src/cpu/lfast.rs. `edges` (+ `mask` when P.use_mask == 1) ->
 // `cand` (1 = candidate, 0 otherwise; every pixel of every level is written).
-// One invocation per pixel, all levels in one dispatch (over the tile list).
+// One invocation per pixel, all levels in one dispatch (over the tile list); the
+// test itself runs on the tile's compacted edge pixels (see main).
 
 @group(0) @binding(1) var<storage, read> edges: array<u32>;
 @group(0) @binding(2) var<storage, read> mask: array<u32>;
@@ -106,22 +107,47 @@ fn is_corner(l: u32, px: i32, py: i32) -> bool {
     return true;
 }
 
+// Work-efficient within the tile: the tile's tested edge pixels are first
+// compacted into `todo` (workgroup memory), then the first invocations run the
+// corner test on them, so the test runs in as few SIMD lanes / warps as there
+// are edge pixels instead of diverging across all 256. Results go back through
+// `hit` to the pixel's own invocation, which writes `cand`.
+var<workgroup> todo: array<u32, 256>;
+var<workgroup> todo_n: atomic<u32>;
+var<workgroup> hit: array<u32, 256>;
+
 @compute @workgroup_size(16, 16, 1)
-fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+fn main(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(local_invocation_id) li: vec3<u32>,
+    @builtin(local_invocation_index) lix: u32,
+) {
+    // A padding workgroup of the tile list: uniform, so the barriers below
+    // are reached by all invocations or none.
+    if (wg.x + wg.y * P.tile_row >= P.total_tiles) { return; }
     let id = tile_pixel(wg, li);
     let l = id.z;
     let w = lw(l);
     let h = lh(l);
-    if (id.x >= w || id.y >= h) { return; }
+    let inside = id.x < w && id.y < h;
     let i = loff(l) + id.y * w + id.x;
+    if (lix == 0u) { atomicStore(&todo_n, 0u); }
+    hit[lix] = 0u;
+    workgroupBarrier();
     // Only pixels at least `border` (>= 7) from every side are tested; a
     // level with w or h <= 2 * border has none. Written this way (no
     // w - border) so nothing underflows.
     let b = max(P.border, 7u);
-    let tested = id.x >= b && id.y >= b && id.x + b < w && id.y + b < h;
-    var c = 0u;
-    if (tested && edges[i] == EDGE && (P.use_mask == 0u || mask[i] != 0u) && is_corner(l, i32(id.x), i32(id.y))) {
-        c = 1u;
+    let tested = inside && id.x >= b && id.y >= b && id.x + b < w && id.y + b < h;
+    if (tested && edges[i] == EDGE && (P.use_mask == 0u || mask[i] != 0u)) {
+        todo[atomicAdd(&todo_n, 1u)] = lix;
     }
-    cand[i] = c;
+    workgroupBarrier();
+    if (lix < atomicLoad(&todo_n)) {
+        let t = todo[lix];
+        let origin = id.xy - li.xy;
+        if (is_corner(l, i32(origin.x + t % 16u), i32(origin.y + t / 16u))) { hit[t] = 1u; }
+    }
+    workgroupBarrier();
+    if (inside) { cand[i] = hit[lix]; }
 }

@@ -1,7 +1,8 @@
 // SPEC 9: Harris corner response on D (7x7 block, 3x3 Sobel, k = 0.04), as
 // OpenCV ORB's HARRIS_SCORE. Mirrors src/cpu/response.rs.
 // `cand` (1 = candidate) + `denoised` -> `resp` (f32 bits) at candidates, 0
-// elsewhere. One invocation per pixel, all levels in one dispatch (over the tile list).
+// elsewhere. One invocation per pixel, all levels in one dispatch (over the tile
+// list); the response itself runs on the tile's compacted candidates (see main).
 //
 // Bit-identical to the CPU: the structure sums are exact integers, and the
 // final formula (harris_from_sums) is f32 in the CPU's operation order, with
@@ -97,16 +98,39 @@ fn structure_sums(l: u32, x: i32, y: i32) -> vec3<i32> {
     return vec3(a, b, c);
 }
 
+// Work-efficient within the tile: candidates are compacted into `todo`
+// (workgroup memory) and the first invocations compute their responses, so
+// the 9x9 window and the formula run in as few SIMD lanes / warps as there are
+// candidates. Results return through `out` to the pixel's own invocation.
+var<workgroup> todo: array<u32, 256>;
+var<workgroup> todo_n: atomic<u32>;
+var<workgroup> out: array<u32, 256>;
+
 @compute @workgroup_size(16, 16, 1)
-fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+fn main(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(local_invocation_id) li: vec3<u32>,
+    @builtin(local_invocation_index) lix: u32,
+) {
+    // padding workgroups of the tile list: uniform, before any barrier
+    if (wg.x + wg.y * P.tile_row >= P.total_tiles) { return; }
     let id = tile_pixel(wg, li);
     let l = id.z;
-    if (id.x >= lw(l) || id.y >= lh(l)) { return; }
+    let inside = id.x < lw(l) && id.y < lh(l);
     let i = loff(l) + id.y * lw(l) + id.x;
-    var out = 0u;
-    if (cand[i] != 0u) {
-        let s = structure_sums(l, i32(id.x), i32(id.y));
-        out = bitcast<u32>(harris_from_sums(s.x, s.y, s.z));
+    if (lix == 0u) { atomicStore(&todo_n, 0u); }
+    out[lix] = 0u;
+    workgroupBarrier();
+    if (inside && cand[i] != 0u) {
+        todo[atomicAdd(&todo_n, 1u)] = lix;
     }
-    resp[i] = out;
+    workgroupBarrier();
+    if (lix < atomicLoad(&todo_n)) {
+        let t = todo[lix];
+        let origin = id.xy - li.xy;
+        let s = structure_sums(l, i32(origin.x + t % 16u), i32(origin.y + t / 16u));
+        out[t] = bitcast<u32>(harris_from_sums(s.x, s.y, s.z));
+    }
+    workgroupBarrier();
+    if (inside) { resp[i] = out[lix]; }
 }
