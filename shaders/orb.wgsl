@@ -1,6 +1,8 @@
 // SPEC 11: the rBRIEF descriptor on the smoothed level. Mirrors
-// src/cpu/orb.rs (`describe`, `describe_continuous`). One invocation per final
-// keypoint, dispatched indirectly over counters[KEYPOINTS] (64 per workgroup).
+// src/cpu/orb.rs (`describe`, `describe_continuous`). One workgroup of 64
+// invocations per final keypoint, dispatched indirectly
+// (indirect::KEYPOINT_GROUPS: keypoint = wg.y * 65535 + wg.x); invocation t
+// makes pairs 4t..4t+3 and ORs them into word t / 8 in workgroup memory.
 // Descriptor i is descriptors[8i .. 8i+8]: bit b of word k is pair 32k + b,
 // so (little-endian) bit i of byte j is pair 8j + i and the buffer's bytes
 // are the [u8; 32] descriptors.
@@ -27,12 +29,29 @@ fn rotate(p: vec4<i32>, c: f32, s: f32) -> vec4<i32> {
     return vec4<i32>(round(vec4(f.x * c - f.y * s, f.x * s + f.y * c, f.z * c - f.w * s, f.z * s + f.w * c)));
 }
 
+var<workgroup> words: array<atomic<u32>, 8>;
+
 @compute @workgroup_size(64, 1, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if (i >= counters[KEYPOINTS] || i >= P.capacity) { return; }
-    let kp = keypoints[i];
-    if (kp.level >= P.n_levels) { return; }
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let i = wg.y * 65535u + wg.x;
+    // No early return before the barriers (they need uniform control flow):
+    // `ok` guards the work instead.
+    var kp: Kp;
+    var ok = false;
+    if (i < counters[KEYPOINTS] && i < P.capacity) {
+        kp = keypoints[i];
+        ok = kp.level < P.n_levels;
+    }
+    if (lane < 8u) { atomicStore(&words[lane], 0u); }
+    workgroupBarrier();
+    if (ok) { describe_part(kp, lane); }
+    workgroupBarrier();
+    if (ok && lane < 8u) { descriptors[8u * i + lane] = atomicLoad(&words[lane]); }
+}
+
+// Invocation `lane`'s pairs 4 lane .. 4 lane + 3 of keypoint kp's descriptor,
+// OR-ed into their word.
+fn describe_part(kp: Kp, lane: u32) {
     let l = kp.level;
     let x = i32(kp.px);
     let y = i32(kp.py);
@@ -41,15 +60,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let a = kp.angle * (PI / 180.0);
     let s = sin(a);
     let c = cos(a);
-    for (var k = 0u; k < 8u; k++) {
-        var word = 0u;
-        for (var b = 0u; b < 32u; b++) {
-            var p = patterns[base + 32u * k + b];
-            if (continuous) { p = rotate(p, c, s); }
-            let va = px(l, x + p.x, y + p.y);
-            let vb = px(l, x + p.z, y + p.w);
-            word |= select(0u, 1u, va < vb) << b;
-        }
-        descriptors[8u * i + k] = word;
+    var bits = 0u;
+    for (var j = 0u; j < 4u; j++) {
+        let pair = 4u * lane + j;
+        var p = patterns[base + pair];
+        if (continuous) { p = rotate(p, c, s); }
+        let va = px(l, x + p.x, y + p.y);
+        let vb = px(l, x + p.z, y + p.w);
+        bits |= select(0u, 1u, va < vb) << (pair % 32u);
     }
+    atomicOr(&words[lane / 8u], bits);
 }

@@ -1,7 +1,9 @@
 // SPEC 11: keypoint orientation by the intensity centroid, and its bin.
 // Mirrors src/cpu/orientation.rs (`moments`, `AngleBins::bin_of`, `angle_deg`).
-// One invocation per final keypoint, dispatched indirectly over
-// counters[KEYPOINTS] (64 per workgroup). The moments are exact integers on
+// One workgroup of 64 invocations per final keypoint, dispatched indirectly
+// (indirect::KEYPOINT_GROUPS: keypoint = wg.y * 65535 + wg.x); the invocations
+// share the disc's pixels and add their integer sums in workgroup atomics
+// (exact, so the order does not matter). The moments are exact integers on
 // the *unsmoothed* level; the angle is an f32 approximation (the host
 // recomputes it exactly from m10, m01).
 
@@ -18,24 +20,21 @@ const UMAX: array<i32, 16> = array<i32, 16>(15, 15, 15, 15, 14, 14, 14, 13, 13, 
 
 fn px(l: u32, x: i32, y: i32) -> i32 { return i32(gray[clamped(l, x, y)]); }
 
-// (m10, m01) over the disc around (x, y), reads clamped: the CPU's border
-// branch, which its test shows equal to the interior one. |m| < 2^21.
-fn moments(l: u32, x: i32, y: i32) -> vec2<i32> {
+// This invocation's share of (m10, m01) over the disc around (x, y): every
+// 64th pixel of the 31x31 square, those outside the disc (|u| > UMAX[|v|])
+// skipped; reads clamped: the CPU's border branch, which its test shows
+// equal to the interior one. The whole sums are below 2^21 in magnitude.
+fn moments_part(l: u32, x: i32, y: i32, lane: u32) -> vec2<i32> {
     var m10 = 0;
     var m01 = 0;
-    for (var u = -HALF_PATCH; u <= HALF_PATCH; u++) {
-        m10 += u * px(l, x + u, y);
-    }
-    for (var v = 1; v <= HALF_PATCH; v++) {
-        var v_sum = 0;
-        let r = UMAX[v];
-        for (var u = -r; u <= r; u++) {
-            let plus = px(l, x + u, y + v);
-            let minus = px(l, x + u, y - v);
-            v_sum += plus - minus;
-            m10 += u * (plus + minus);
+    for (var k = lane; k < 961u; k += 64u) {
+        let u = i32(k % 31u) - HALF_PATCH;
+        let v = i32(k / 31u) - HALF_PATCH;
+        if (abs(u) <= UMAX[abs(v)]) {
+            let p = px(l, x + u, y + v);
+            m10 += u * p;
+            m01 += v * p;
         }
-        m01 += v * v_sum;
     }
     return vec2(m10, m01);
 }
@@ -73,13 +72,34 @@ fn angle_deg(m: vec2<i32>) -> f32 {
     return a;
 }
 
+var<workgroup> sum10: atomic<i32>;
+var<workgroup> sum01: atomic<i32>;
+
 @compute @workgroup_size(64, 1, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if (i >= counters[KEYPOINTS] || i >= P.capacity) { return; }
-    var kp = keypoints[i];
-    if (kp.level >= P.n_levels) { return; }
-    let m = moments(kp.level, i32(kp.px), i32(kp.py));
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let i = wg.y * 65535u + wg.x;
+    // No early return before the barriers (they need uniform control flow):
+    // `ok` guards the work instead.
+    var kp0: Kp;
+    var ok = false;
+    if (i < counters[KEYPOINTS] && i < P.capacity) {
+        kp0 = keypoints[i];
+        ok = kp0.level < P.n_levels;
+    }
+    if (lane == 0u) {
+        atomicStore(&sum10, 0);
+        atomicStore(&sum01, 0);
+    }
+    workgroupBarrier();
+    if (ok) {
+        let part = moments_part(kp0.level, i32(kp0.px), i32(kp0.py), lane);
+        atomicAdd(&sum10, part.x);
+        atomicAdd(&sum01, part.y);
+    }
+    workgroupBarrier();
+    if (!ok || lane != 0u) { return; }
+    var kp = kp0;
+    let m = vec2(atomicLoad(&sum10), atomicLoad(&sum01));
     kp.m10 = m.x;
     kp.m01 = m.y;
     kp.bin = bin_of(m);

@@ -13,7 +13,8 @@
 //   corners that precede it. The not-taken corners that fill the spare quota
 //   are the first `spare` of them in order, so a corner is selected iff it is
 //   taken or U < spare, and its output index is T + min(U, spare).
-// - finish (1 invocation): the final count, indirect args and draw args.
+// - finish (1 invocation): the final count, indirect args (64 keypoints per
+//   group, and one keypoint per group) and draw args.
 // Both rank loops are O(n^2) over the corner list, tiled through workgroup
 // memory. Positions are unique, so the order is total and the output deterministic.
 
@@ -32,6 +33,9 @@ const C_TAKEN: u32 = 2u;
 const I_CORNERS: u32 = 0u;
 const I_KEYPOINTS: u32 = 4u;
 const I_DRAW: u32 = 8u;
+const I_KEYPOINT_GROUPS: u32 = 12u;
+// max_compute_workgroups_per_dimension's guaranteed minimum.
+const MAX_GROUPS: u32 = 65535u;
 
 const GROUP: u32 = 64u;
 
@@ -168,6 +172,9 @@ fn finish() {
     let count = taken + min(spare(), n - taken);
     atomicStore(&counters[C_KEYPOINTS], count);
     write_dispatch(I_KEYPOINTS, count);
+    indirect[I_KEYPOINT_GROUPS] = min(count, MAX_GROUPS);
+    indirect[I_KEYPOINT_GROUPS + 1u] = (count + MAX_GROUPS - 1u) / MAX_GROUPS;
+    indirect[I_KEYPOINT_GROUPS + 2u] = 1u;
     indirect[I_DRAW] = 4u;
     indirect[I_DRAW + 1u] = count;
     indirect[I_DRAW + 2u] = 0u;

@@ -106,6 +106,11 @@ fn download_keypoints(ctx: &GpuContext, b: &Buffers, n_corners: usize) -> Vec<Gp
         "keypoint dispatch args"
     );
     assert_eq!(at(indirect::DRAW), [4, n as u32, 0, 0], "draw args");
+    assert_eq!(
+        at(indirect::KEYPOINT_GROUPS)[..3],
+        [n.min(65535) as u32, n.div_ceil(65535) as u32, 1],
+        "one-group-per-keypoint dispatch args"
+    );
     let words = t::download(ctx, &b.keypoints).unwrap();
     bytemuck::cast_slice::<u32, GpuKeypoint>(&words[..n * 12]).to_vec()
 }

@@ -439,6 +439,9 @@ fn upload_keypoints(ctx: &GpuContext, b: &Buffers, kps: &[GpuKeypoint]) {
         indirect::KEYPOINTS,
         bytemuck::cast_slice(&[(kps.len() as u32).div_ceil(64), 1, 1]),
     );
+    // as select's `finish` writes them: one workgroup per keypoint
+    let n = kps.len() as u32;
+    ctx.queue.write_buffer(&b.indirect, indirect::KEYPOINT_GROUPS, bytemuck::cast_slice(&[n.min(65535), n.div_ceil(65535), 1]));
 }
 
 fn download_keypoints(ctx: &GpuContext, b: &Buffers) -> Vec<GpuKeypoint> {

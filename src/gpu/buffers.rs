@@ -57,8 +57,11 @@ pub mod indirect {
     pub const KEYPOINTS: u64 = 16;
     /// `draw_indirect` args: vertex_count 4, instance_count = keypoints.
     pub const DRAW: u64 = 32;
+    /// `dispatch_workgroups_indirect` with one workgroup per final keypoint:
+    /// `(min(n, 65535), ceil(n / 65535), 1)` (orientation, orb).
+    pub const KEYPOINT_GROUPS: u64 = 48;
     /// Size of the buffer.
-    pub const SIZE: u64 = 48;
+    pub const SIZE: u64 = 64;
 }
 
 /// Slots of [`Buffers::counters`].
@@ -265,6 +268,7 @@ impl Buffers {
         indirect_init[5] = 1;
         indirect_init[6] = 1;
         indirect_init[8] = 4;
+        indirect_init[14] = 1;
         let this = Self {
             params: init("params", bytemuck::bytes_of(&layout.params), wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST),
             level_index: init("level_index", &level_index, wgpu::BufferUsages::UNIFORM),

@@ -29,5 +29,5 @@ simple_pass! {
         "patterns" = patterns,
         "descriptors" = descriptors,
     }
-    dispatch |b| Groups::Indirect(indirect::KEYPOINTS)
+    dispatch |b| Groups::Indirect(indirect::KEYPOINT_GROUPS)
 }
