@@ -6,14 +6,13 @@
 // connected-component labelling of the active (WEAK or STRONG) pixels with a
 // lock-free union-find (Playne & Hawick, "A New Algorithm for Parallel
 // Connected-Component Labelling on GPUs", 2018): a component is an edge iff it
-// holds a STRONG pixel. Five dispatches, each one invocation per pixel of
-// every level (z = level), in this order:
+// holds a STRONG pixel. Four dispatches, each one invocation per pixel of
+// every level (over the tile list), in this order:
 //   init         labels[i] = i
 //   merge        union of each active pixel with its active left, up-left,
 //                up and up-right neighbours (the other four see it as theirs)
-//   compress     labels[i] = root of i
-//   flag         flags[root] = 1 for every STRONG pixel (`flags` is cleared
-//                by the pass's prepare)
+//   compress     labels[i] = root of i, and flags[root] = 1 for every STRONG
+//                pixel (`flags` is cleared by the pass's prepare)
 //   final_edges  edges = 255 iff active and flags[labels[i]] == 1
 // No host loop and no iteration cap: the result is exact after one pass of
 // each, whatever the length or shape of a contour.
@@ -130,17 +129,11 @@ fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) 
     if (!is_active(i)) { return; }
     // Roots do not change any more: every store writes a root, an ancestor
     // of i, so concurrent finds still end at the same root.
-    atomicStore(&labels[i], find(i));
-}
-
-@compute @workgroup_size(16, 16, 1)
-fn flag(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
-    if (!inside(id)) { return; }
-    let i = at(id);
-    if (ruled[i] != STRONG) { return; }
-    // labels[i] is i's root after compress
-    atomicOr(&flags[atomicLoad(&labels[i])], 1u);
+    let root = find(i);
+    atomicStore(&labels[i], root);
+    // A STRONG pixel marks its component (final_edges reads the mark only
+    // after this dispatch has ended).
+    if (ruled[i] == STRONG) { atomicOr(&flags[root], 1u); }
 }
 
 @compute @workgroup_size(16, 16, 1)

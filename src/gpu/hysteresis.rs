@@ -1,7 +1,7 @@
 //! SPEC 7 rule 3 (hysteresis) on the GPU: shaders/hysteresis.wgsl, mirroring
 //! src/cpu/hysteresis.rs. `ruled` -> `edges` (255 / 0), all levels at once, by
-//! union-find connected-component labelling in five dispatches (init, merge,
-//! compress, flag, final_edges): exact after a fixed number of dispatches,
+//! union-find connected-component labelling in four dispatches (init, merge,
+//! compress (with the STRONG flags), final_edges): exact after a fixed number of dispatches,
 //! with no read-back and no iteration cap (the shader argues why).
 
 use super::buffers::Buffers;
@@ -21,7 +21,7 @@ pub const BINDINGS: &[Binding] = &[
 ];
 
 /// The entry points in dispatch order.
-pub const ENTRIES: [&str; 5] = ["init", "merge", "compress", "flag", "final_edges"];
+pub const ENTRIES: [&str; 4] = ["init", "merge", "compress", "final_edges"];
 
 /// The hysteresis pass.
 #[derive(Debug)]
@@ -85,7 +85,7 @@ impl Pass for HysteresisPass {
     }
 
     fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
-        // `flag` only ever sets flags of roots to 1: start from all zero.
+        // `compress` only ever sets flags of roots to 1: start from all zero.
         encoder.clear_buffer(&b.flags, 0, None);
     }
 }
