@@ -2,7 +2,7 @@
 // smoothing the levels before description. Mirrors src/cpu/blur.rs
 // (`gaussian_blur_into`, `blur_any`): a horizontal pass to Q8 sums in
 // `blur_tmp` (< 2^16, as the CPU's u16), then a vertical pass to Q16, rounded.
-// All levels per dispatch (z = level).
+// All levels per dispatch (over the tile list).
 
 @group(0) @binding(1) var<storage, read> gray: array<u32>;
 @group(0) @binding(2) var<storage, read_write> blur_tmp: array<u32>;
@@ -29,9 +29,18 @@ fn horizontal(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let w = i32(lw(l));
     let row = loff(l) + id.y * lw(l);
+    let x = i32(id.x);
     var acc = 0u;
-    for (var k = 0; k < 7; k++) {
-        acc += ORB_KERNEL[k] * gray[row + u32(reflect101(i32(id.x) + k - R, w))];
+    if (x >= R && x + R < w) {
+        // interior: no reflection (the modulo of reflect101 is costly on GPUs)
+        let c = row + id.x;
+        for (var k = 0u; k < 7u; k++) {
+            acc += ORB_KERNEL[k] * gray[c + k - 3u];
+        }
+    } else {
+        for (var k = 0; k < 7; k++) {
+            acc += ORB_KERNEL[k] * gray[row + u32(reflect101(x + k - R, w))];
+        }
     }
     blur_tmp[row + id.x] = acc;
 }
@@ -42,10 +51,19 @@ fn vertical(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) 
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let h = i32(lh(l));
+    let y = i32(id.y);
     var acc = 0u;
-    for (var k = 0; k < 7; k++) {
-        let yy = u32(reflect101(i32(id.y) + k - R, h));
-        acc += ORB_KERNEL[k] * blur_tmp[loff(l) + yy * lw(l) + id.x];
+    if (y >= R && y + R < h) {
+        // interior: no reflection
+        let top = loff(l) + (id.y - 3u) * lw(l) + id.x;
+        for (var k = 0u; k < 7u; k++) {
+            acc += ORB_KERNEL[k] * blur_tmp[top + k * lw(l)];
+        }
+    } else {
+        for (var k = 0; k < 7; k++) {
+            let yy = u32(reflect101(y + k - R, h));
+            acc += ORB_KERNEL[k] * blur_tmp[loff(l) + yy * lw(l) + id.x];
+        }
     }
     smoothed[loff(l) + id.y * lw(l) + id.x] = (acc + (1u << 15u)) >> 16u;
 }

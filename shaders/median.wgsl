@@ -19,28 +19,40 @@ fn is_noise(l: u32, x: i32, y: i32) -> bool {
     return true;
 }
 
-// The 19-exchange network of median9 in src/cpu/median.rs.
+// The 19-exchange network of median9 in src/cpu/median.rs, written out with
+// constant indices: a table-driven loop indexes the 9 values dynamically,
+// which puts them in memory instead of registers on real GPUs.
 fn median9(x: i32, y: i32, l: u32) -> u32 {
-    var p: array<u32, 9>;
-    var i = 0u;
-    for (var dy = -1; dy <= 1; dy++) {
-        for (var dx = -1; dx <= 1; dx++) {
-            p[i] = px(l, x + dx, y + dy);
-            i++;
-        }
-    }
-    let net = array<vec2<u32>, 19>(
-        vec2(1u, 2u), vec2(4u, 5u), vec2(7u, 8u), vec2(0u, 1u), vec2(3u, 4u), vec2(6u, 7u),
-        vec2(1u, 2u), vec2(4u, 5u), vec2(7u, 8u), vec2(0u, 3u), vec2(5u, 8u), vec2(4u, 7u),
-        vec2(3u, 6u), vec2(1u, 4u), vec2(2u, 5u), vec2(4u, 7u), vec2(4u, 2u), vec2(6u, 4u),
-        vec2(4u, 2u));
-    for (var k = 0u; k < 19u; k++) {
-        let a = p[net[k].x];
-        let b = p[net[k].y];
-        p[net[k].x] = min(a, b);
-        p[net[k].y] = max(a, b);
-    }
-    return p[4];
+    var p0 = px(l, x - 1, y - 1);
+    var p1 = px(l, x, y - 1);
+    var p2 = px(l, x + 1, y - 1);
+    var p3 = px(l, x - 1, y);
+    var p4 = px(l, x, y);
+    var p5 = px(l, x + 1, y);
+    var p6 = px(l, x - 1, y + 1);
+    var p7 = px(l, x, y + 1);
+    var p8 = px(l, x + 1, y + 1);
+    var t: u32;
+    t = min(p1, p2); p2 = max(p1, p2); p1 = t;
+    t = min(p4, p5); p5 = max(p4, p5); p4 = t;
+    t = min(p7, p8); p8 = max(p7, p8); p7 = t;
+    t = min(p0, p1); p1 = max(p0, p1); p0 = t;
+    t = min(p3, p4); p4 = max(p3, p4); p3 = t;
+    t = min(p6, p7); p7 = max(p6, p7); p6 = t;
+    t = min(p1, p2); p2 = max(p1, p2); p1 = t;
+    t = min(p4, p5); p5 = max(p4, p5); p4 = t;
+    t = min(p7, p8); p8 = max(p7, p8); p7 = t;
+    t = min(p0, p3); p3 = max(p0, p3); p0 = t;
+    t = min(p5, p8); p8 = max(p5, p8); p5 = t;
+    t = min(p4, p7); p7 = max(p4, p7); p4 = t;
+    t = min(p3, p6); p6 = max(p3, p6); p3 = t;
+    t = min(p1, p4); p4 = max(p1, p4); p1 = t;
+    t = min(p2, p5); p5 = max(p2, p5); p2 = t;
+    t = min(p4, p7); p7 = max(p4, p7); p4 = t;
+    t = min(p4, p2); p2 = max(p4, p2); p4 = t;
+    t = min(p6, p4); p4 = max(p6, p4); p6 = t;
+    t = min(p4, p2); p2 = max(p4, p2); p4 = t;
+    return p4;
 }
 
 @compute @workgroup_size(16, 16, 1)
