@@ -38,7 +38,7 @@ fn auto_never_takes_an_unnamed_software_adapter() {
 #[test]
 fn a_named_software_adapter_is_taken_by_auto_and_gpu() {
     // lavapipe in CI (REQUIRE_GPU=1 makes its absence a failure there)
-    let Some(ctx) = lfast::gpu::testing::context() else { return };
+    let Some(ctx) = lfast::testing::context() else { return };
     let name = ctx.info.name.clone();
     let opts = GpuOptions { adapter_name: Some(name.clone()), ..GpuOptions::ignoring_env() };
     for backend in [Backend::Auto, Backend::Gpu] {
@@ -86,7 +86,7 @@ fn cli_auto_and_info_follow_the_rule() {
         assert!(info.contains("--backend auto uses: cpu (no hardware GPU adapter"), "{info}");
     }
     // naming the software adapter is asking for it
-    if let Some(ctx) = lfast::gpu::testing::context() {
+    if let Some(ctx) = lfast::testing::context() {
         let name = ctx.info.name.clone();
         let out = tmp.path().join("named");
         let o = lfast_unnamed(&["detect", img, "--out", out.to_str().unwrap(), "--adapter", &name]);
