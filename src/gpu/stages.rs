@@ -46,8 +46,9 @@ macro_rules! stages {
                 Ok(Bound { $($m: self.$m.bind(d, b)?,)* })
             }
 
-            /// Records every stage in order, each in its own compute pass after
-            /// its `prepare` commands. `special(stage, pass)` may record a stage
+            /// Records every stage in order: when profiling, each in its own
+            /// compute pass (timed) after its `prepare` commands; otherwise all
+            /// `prepare` commands, then all stages in one compute pass. `special(stage, pass)` may record a stage
             /// itself (returning true), as the texture input does for `luma`.
             pub(crate) fn record_all(
                 &self,
@@ -57,6 +58,26 @@ macro_rules! stages {
                 ts: Option<&Timestamps>,
                 mut special: impl FnMut(&'static str, &mut wgpu::ComputePass<'_>) -> bool,
             ) {
+                let Some(ts) = ts else {
+                    // Not profiling: every stage's `prepare` first (each only
+                    // clears accumulators that no earlier stage of the frame
+                    // touches: counters, hist, flags), then every stage as
+                    // dispatches of one compute pass. wgpu orders them and puts
+                    // the barriers between them; a pass per stage would add its
+                    // begin/end on the CPU and the GPU.
+                    $(self.$m.prepare(enc, b);)*
+                    let mut cp = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("lfast"),
+                        timestamp_writes: None,
+                    });
+                    $(
+                        if !special(stringify!($m), &mut cp) {
+                            self.$m.record(&mut cp, &bound.$m, b);
+                        }
+                    )*
+                    return;
+                };
+                let ts = Some(ts);
                 let mut stage = 0;
                 $(
                     self.$m.prepare(enc, b);
