@@ -17,6 +17,9 @@ pub mod eval;
 pub mod image;
 pub mod io;
 mod keypoint;
+pub mod spec;
+#[doc(hidden)]
+pub mod testing;
 pub mod gpu;
 pub mod vo;
 

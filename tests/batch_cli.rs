@@ -269,7 +269,7 @@ fn backends_and_adapters() {
 
     // with a GPU (lavapipe in CI, where REQUIRE_GPU=1 makes its absence a failure):
     // the GPU backend writes the same features as the CPU
-    if lfast::gpu::testing::context().is_none() {
+    if lfast::testing::context().is_none() {
         return;
     }
     assert!(s.contains("backend in use: gpu"), "{s}");

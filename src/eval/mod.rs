@@ -24,10 +24,13 @@
 //! is deterministic; the noise is seeded.
 
 pub mod continuity;
+pub mod decision;
+pub mod format;
 pub mod illumination;
 pub mod kitti;
 pub mod metrics;
 pub mod noise;
+pub mod output;
 pub mod plot;
 pub mod repeatability;
 pub mod report;
