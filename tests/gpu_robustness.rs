@@ -8,6 +8,7 @@
 
 mod common;
 
+use common::plane_fn as plane;
 use lfast::config::{Config, Mode};
 use lfast::cpu::CpuDetector;
 use lfast::gpu::detector::{Frame, GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
@@ -93,17 +94,6 @@ fn identical(what: &str, a: &Frame, b: &Frame) -> Result<(), String> {
         return Err(format!("{what}: descriptors differ (first at {i:?})"));
     }
     Ok(())
-}
-
-/// A plane from a closure of (x, y).
-fn plane(w: u32, h: u32, f: impl Fn(u32, u32) -> u8) -> Plane<u8> {
-    let mut p = Plane::<u8>::new(w, h);
-    for y in 0..h {
-        for x in 0..w {
-            p.data[(y * w + x) as usize] = f(x, y);
-        }
-    }
-    p
 }
 
 fn xorshift(seed: u32) -> impl FnMut() -> u32 {

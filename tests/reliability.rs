@@ -9,6 +9,8 @@
 //! and fail instead of skipping with `REQUIRE_GPU=1`, as in CI.
 
 mod common;
+
+use common::plane_fn as plane;
 #[path = "../fuzz/src/lib.rs"]
 mod fuzz_cases;
 
@@ -20,15 +22,6 @@ use lfast::{Backend, Config, Detector, Error, GrayView, KeyPoint, Mode, Plane};
 use std::path::{Path, PathBuf};
 
 // ---------------------------------------------------------------- helpers
-
-/// A plane from a closure of (x, y), called in row-major order.
-fn plane(w: u32, h: u32, mut f: impl FnMut(u32, u32) -> u8) -> Plane<u8> {
-    Plane {
-        width: w,
-        height: h,
-        data: (0..w * h).map(|i| f(i % w, i / w)).collect(),
-    }
-}
 
 /// xorshift32 noise, every value 0..=255.
 fn noise(w: u32, h: u32, seed: u32) -> Plane<u8> {

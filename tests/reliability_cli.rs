@@ -7,80 +7,11 @@
 
 mod common;
 
-use common::{lfast, stderr, stdout};
-use lfast::io::Features;
+use common::{command, files, lfast, read_features, show, stderr, stdout, summary};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn show(o: &Output) -> String {
-    format!(
-        "exit {:?}\nstdout: {}\nstderr: {}",
-        o.status,
-        stdout(o),
-        stderr(o)
-    )
-}
-
-/// The summary line's (done, skipped, failed).
-fn summary(o: &Output) -> (u64, u64, u64) {
-    let text = stdout(o);
-    let line = text
-        .lines()
-        .rfind(|l| l.starts_with("summary: "))
-        .unwrap_or_else(|| panic!("no summary\n{}", show(o)));
-    let num = |key: &str| -> u64 {
-        let rest = &line[line.find(key).unwrap() + key.len()..];
-        rest.trim_start()
-            .split(|c: char| !c.is_ascii_digit())
-            .next()
-            .unwrap()
-            .parse()
-            .unwrap()
-    };
-    (num("done"), num("skipped"), num("failed"))
-}
-
-/// The binary with `args` and extra environment variables, not yet started.
-fn command(args: &[&dyn AsRef<OsStr>], env: &[(&str, &str)]) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_lfast"));
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        c.env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    }
-    for a in args {
-        c.arg(a);
-    }
-    for (k, v) in env {
-        c.env(k, v);
-    }
-    c
-}
-
-/// Every file under `dir`, relative, sorted (hidden ones included).
-fn files(dir: &Path) -> Vec<String> {
-    fn walk(root: &Path, d: &Path, out: &mut Vec<String>) {
-        for e in std::fs::read_dir(d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(root, &p, out);
-            } else {
-                out.push(p.strip_prefix(root).unwrap().to_string_lossy().into_owned());
-            }
-        }
-    }
-    let mut v = Vec::new();
-    if dir.exists() {
-        walk(dir, dir, &mut v);
-    }
-    v.sort();
-    v
-}
-
-fn read_features(p: &Path) -> Features {
-    let text = std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
 
 /// A decoder seed kept for the fuzzer: the file without its first byte (which
 /// only picks the fuzzer's file name extension).
