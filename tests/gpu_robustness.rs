@@ -149,7 +149,7 @@ fn render(c: &Content, w: u32, h: u32) -> Plane<u8> {
                 .map(|_| {
                     let (x, y) = (r() % w, r() % h);
                     let (rw, rh) = (4 + r() % (w / 5 + 4), 4 + r() % (h / 5 + 4));
-                    (x, y, rw, rh, if r() % 2 == 0 { 0 } else { 255 })
+                    (x, y, rw, rh, if r().is_multiple_of(2) { 0 } else { 255 })
                 })
                 .collect();
             plane(w, h, |x, y| {
@@ -1385,7 +1385,8 @@ fn bad_gpu_inputs_are_typed_errors() {
     };
     use wgpu::TextureFormat as F;
     let bind = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
-    let cases: Vec<(&str, wgpu::TextureView, F, fn(&Error) -> bool)> = vec![
+    type Case = (&'static str, wgpu::TextureView, F, fn(&Error) -> bool);
+    let cases: Vec<Case> = vec![
         (
             "wrong size",
             tex(w + 1, h, F::Rgba8Unorm, bind),

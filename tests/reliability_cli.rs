@@ -129,6 +129,7 @@ fn one_batch_with_every_format_and_every_broken_input() {
 
 /// Runs `cmd` and returns its output and peak resident memory in KiB.
 #[cfg(unix)]
+#[allow(clippy::zombie_processes)] // reaped by libc::wait4 below, which also reports the peak memory
 fn run_measuring_memory(mut cmd: Command) -> (std::process::ExitStatus, String, i64) {
     use std::io::Read;
     use std::os::unix::process::ExitStatusExt;
@@ -231,7 +232,7 @@ fn a_frame_over_the_gpu_limits_runs_on_the_cpu_with_a_warning() {
         ..Default::default()
     };
     let lim = ctx.device.limits();
-    let limit = (lim.max_storage_buffer_binding_size as u64).min(lim.max_buffer_size);
+    let limit = lim.max_storage_buffer_binding_size.min(lim.max_buffer_size);
     let over = |s: u32| {
         let l = lfast::gpu::FrameLayout::new(&cfg, s, s);
         l.capacity as u64 * 48 > limit || l.total_px as u64 * 4 > limit
@@ -381,7 +382,8 @@ fn outputs_are_byte_identical_across_jobs_threads_and_backends() {
         std::fs::copy(common::data(name), dir.join(name)).unwrap();
     }
     let gpu = lfast::testing::context().is_some();
-    let runs: Vec<(&str, Vec<&str>, Vec<(&str, &str)>)> = vec![
+    type Run<'a> = (&'a str, Vec<&'a str>, Vec<(&'a str, &'a str)>);
+    let runs: Vec<Run> = vec![
         ("jobs1", vec!["--backend", "cpu", "--jobs", "1"], vec![]),
         ("jobs2", vec!["--backend", "cpu", "--jobs", "2"], vec![]),
         (
@@ -403,7 +405,8 @@ fn outputs_are_byte_identical_across_jobs_threads_and_backends() {
         ("gpu", vec!["--backend", "gpu"], vec![]),
         ("gpu-jobs1", vec!["--backend", "gpu", "--jobs", "1"], vec![]),
     ];
-    let mut reference: Option<(String, Vec<(String, Vec<u8>)>)> = None;
+    type Outputs = (String, Vec<(String, Vec<u8>)>);
+    let mut reference: Option<Outputs> = None;
     for (name, flags, env) in runs {
         if name.starts_with("gpu") && !gpu {
             continue;
@@ -690,7 +693,7 @@ fn sigint_stops_lfast_edges_between_files() {
     let left = files(&out);
     assert_eq!(temporaries(&out), Vec::<String>::new());
     assert!(
-        !left.is_empty() && left.len() < 30 * 5 && left.len() % 5 == 0,
+        !left.is_empty() && left.len() < 30 * 5 && left.len().is_multiple_of(5),
         "{left:?}"
     );
     for f in &left {
