@@ -14,7 +14,17 @@ Ratios printed (ours / theirs, of the medians and of the minima; lower is better
 the target applies to the median ratio):
   improved-Canny edges          / cv2.Canny            target <= 1.0
   L-FAST + ORB detect_and_compute / cv2 ORB(2000)      target <= 0.5
-  our ORB baseline (2000)       / cv2 ORB(2000)        (no target)
+  our ORB baseline (2000)       / cv2 ORB(2000)        target <= 1.0
+  whole process: `lfast detect DIR --backend cpu` (decode, detect, describe,
+  write JSON) / a Python loop of cv2.imread + ORB(2000).detectAndCompute
+                                                       target <= 0.5
+
+The whole-process row runs the CLI binary (--lfast-bin, default
+target/release/lfast) over the frames' directory into a fresh temporary
+directory, R times after one warm-up, and reads the wall time of each run;
+OpenCV's side loops over the same files, imread (grayscale) + ORB(2000)
+detectAndCompute, in this process (interpreter start-up not counted). Both
+give ms per frame. --no-cli skips the row.
 
 Default frames: the 51 KITTI frames of ../shared/data/kitti/seq01_000000-000050/image_0.
 Requires: pip install opencv-python-headless numpy.
@@ -29,7 +39,9 @@ import os
 import platform
 import statistics
 import subprocess
+import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -42,7 +54,8 @@ KITTI_DIR = ROOT.parent / "shared" / "data" / "kitti" / "seq01_000000-000050" / 
 PAIRS = [
     ("edges", "cv2_canny", "improved Canny edges / cv2.Canny(100, 200)", 1.0),
     ("lfast_detect_and_compute", "cv2_orb2000", "L-FAST+ORB detect_and_compute / cv2 ORB(2000)", 0.5),
-    ("orb_baseline", "cv2_orb2000", "our ORB baseline (2000) / cv2 ORB(2000)", None),
+    ("orb_baseline", "cv2_orb2000", "our ORB baseline (2000) / cv2 ORB(2000)", 1.0),
+    ("cli_detect_cpu", "cv2_imread_orb2000", "lfast detect DIR --backend cpu / cv2 imread+ORB loop", 0.5),
 ]
 
 
@@ -96,6 +109,51 @@ def run_opencv(files, repeats):
     }
 
 
+def run_cli(files, repeats, binary):
+    """Wall time of `lfast detect DIR --backend cpu` over the frames' directory (one warm-up run)."""
+    dirs = {Path(f).resolve().parent for f in files}
+    if len(dirs) != 1 or len(list(next(iter(dirs)).glob("*.png"))) != len(files):
+        raise SystemExit("the whole-process row needs the frames to be all the PNGs of one directory (or pass --no-cli)")
+    src = next(iter(dirs))
+    cmd = [str(binary), "detect", str(src), "--backend", "cpu", "--quiet", "--format", "json"]
+    print("running:", " ".join(cmd), file=sys.stderr)
+    per_frame = []
+    n_kp = None
+    for i in range(repeats + 1):
+        out = Path(tempfile.mkdtemp(prefix="lfast_bench_"))
+        try:
+            t = time.perf_counter()
+            subprocess.run(cmd + ["--out", str(out)], cwd=ROOT, check=True, stdout=subprocess.DEVNULL)
+            dt = (time.perf_counter() - t) * 1e3 / len(files)
+            if i == 0:
+                n_kp = sum(len(json.loads(p.read_text()).get("keypoints", [])) for p in out.glob("*.json"))
+            else:
+                per_frame.append(dt)
+        finally:
+            shutil.rmtree(out, ignore_errors=True)
+    return summary(per_frame, n_kp / len(files), "mean_keypoints")
+
+
+def run_opencv_loop(files, repeats):
+    """A Python loop of cv2.imread + ORB(2000).detectAndCompute over the files (one warm-up pass)."""
+    orb = cv2.ORB_create(2000)
+
+    def one_pass():
+        n = 0
+        for f in files:
+            img = cv2.imread(str(f), cv2.IMREAD_GRAYSCALE)
+            n += len(orb.detectAndCompute(img, None)[0])
+        return n
+
+    n = one_pass()
+    per_frame = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        one_pass()
+        per_frame.append((time.perf_counter() - t) * 1e3 / len(files))
+    return summary(per_frame, n / len(files), "mean_keypoints")
+
+
 def git_commit():
     try:
         rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, check=True,
@@ -122,6 +180,9 @@ def main():
     ap.add_argument("files", nargs="*", type=Path, help="image files (default: the 51 KITTI seq01 frames)")
     ap.add_argument("--repeats", "-r", type=int, default=5, help="timed passes over the list (default 5)")
     ap.add_argument("--bin", type=Path, help="prebuilt bench_frames binary (default: cargo run --release)")
+    ap.add_argument("--lfast-bin", type=Path, default=ROOT / "target" / "release" / "lfast",
+                    help="the CLI for the whole-process row (default target/release/lfast)")
+    ap.add_argument("--no-cli", action="store_true", help="skip the whole-process row")
     ap.add_argument("--json-out", type=Path, help="also write all numbers to this JSON file")
     ap.add_argument("--commit", help="what the measured binary was built from (default: this checkout's "
                     "`git rev-parse --short HEAD`, +dirty if it has uncommitted changes)")
@@ -137,6 +198,11 @@ def main():
     ours = run_ours(files, args.repeats, args.bin)
     theirs = run_opencv(files, args.repeats)
     methods = dict(ours["methods"], **theirs)
+    if not args.no_cli:
+        if not args.lfast_bin.exists():
+            raise SystemExit(f"{args.lfast_bin} not found: cargo build --release, or --lfast-bin PATH, or --no-cli")
+        methods["cli_detect_cpu"] = run_cli(files, args.repeats, args.lfast_bin)
+        methods["cv2_imread_orb2000"] = run_opencv_loop(files, args.repeats)
 
     print(f"\n{len(files)} frames {ours['sizes']}, {args.repeats} timed passes after 1 warm-up; "
           f"lfast {ours['threads']} rayon threads, OpenCV {cv2.__version__} with {cv2.getNumThreads()} threads; "
@@ -149,6 +215,8 @@ def main():
     ratios = {}
     print(f"\n{'ratio ours / OpenCV':50} {'median':>7} {'min':>7} {'target':>7}")
     for ours_name, cv_name, label, target in PAIRS:
+        if ours_name not in methods:
+            continue
         r = methods[ours_name]["median_ms"] / methods[cv_name]["median_ms"]
         r_min = methods[ours_name]["min_ms"] / methods[cv_name]["min_ms"]
         ratios[ours_name + "/" + cv_name] = {"ratio": r, "ratio_min": r_min, "target": target, "label": label}

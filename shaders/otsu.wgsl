@@ -13,6 +13,7 @@
 // d = |n*s0 - n0*sum| < 2^62 (two), num = d^2 < 2^124 (four), den = n0*n1
 // < 2^56 (two), and the cross products num*bden < 2^180 (six): all exact.
 // n0 and s0 come from a workgroup prefix sum (Hillis-Steele, 8 steps).
+// Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/otsu.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> hist: array<u32>;
 @group(0) @binding(2) var<storage, read_write> otsu: array<u32>;

@@ -17,6 +17,7 @@
 //   group, and one keypoint per group) and draw args.
 // Both rank loops are O(n^2) over the corner list, tiled through workgroup
 // memory. Positions are unique, so the order is total and the output deterministic.
+// Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/select.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> corners: array<Kp>;
 @group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;

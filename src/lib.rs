@@ -14,9 +14,11 @@ pub mod cpu;
 mod detector;
 pub mod error;
 pub mod eval;
+pub mod frontend;
 pub mod image;
 pub mod io;
 mod keypoint;
+pub mod rng;
 pub mod spec;
 #[doc(hidden)]
 pub mod testing;

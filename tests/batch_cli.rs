@@ -3,53 +3,12 @@
 
 mod common;
 
-use lfast::io::Features;
 use std::ffi::OsStr;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 
-use common::{lfast, stderr, stdout};
-
-fn show(o: &Output) -> String {
-    format!("exit {:?}\nstdout: {}\nstderr: {}", o.status, stdout(o), stderr(o))
-}
-
-/// The summary line's (done, skipped, failed).
-fn summary(o: &Output) -> (u64, u64, u64) {
-    let text = stdout(o);
-    let line = text.lines().rfind(|l| l.starts_with("summary: ")).unwrap_or_else(|| panic!("no summary\n{}", show(o)));
-    let num = |key: &str| -> u64 {
-        let rest = &line[line.find(key).unwrap_or_else(|| panic!("no `{key}` in {line:?}")) + key.len()..];
-        rest.trim_start().split(|c: char| !c.is_ascii_digit()).next().unwrap().parse().unwrap()
-    };
-    (num("done"), num("skipped"), num("failed"))
-}
-
-fn read_features(p: &Path) -> Features {
-    let text = std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
-
-/// Every file under `dir`, relative, sorted.
-fn files(dir: &Path) -> Vec<String> {
-    fn walk(root: &Path, d: &Path, out: &mut Vec<String>) {
-        for e in std::fs::read_dir(d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(root, &p, out);
-            } else {
-                out.push(p.strip_prefix(root).unwrap().to_string_lossy().replace('\\', "/"));
-            }
-        }
-    }
-    let mut v = Vec::new();
-    if dir.exists() {
-        walk(dir, dir, &mut v);
-    }
-    v.sort();
-    v
-}
+use common::{files, lfast, read_features, show, stderr, stdout, summary};
 
 /// in/: coins.png, text.png, sub/camera.png (good), trunc.png (a truncated
 /// PNG), x.png (a text file).
@@ -391,6 +350,33 @@ fn detectors_and_jobs() {
     }
     let o = lfast(&[&"detect", &img, &"--out", &tmp.path().join("x"), &"--jobs", &"0"]);
     assert_eq!(o.status.code(), Some(2), "{}", show(&o));
+}
+
+/// `lfast detect --detector orb` builds ORB from the config as `lfast vo
+/// --features orb` does (lfast::frontend): `orientation_bins` reaches the
+/// descriptors (detect used to ignore it and always bin by 30).
+#[test]
+fn orb_detector_honours_orientation_bins() {
+    use lfast::baseline::orb::{OrbDetector, OrbParams};
+    let tmp = tempfile::tempdir().unwrap();
+    let img = common::data("coins.png");
+    let g = lfast::image::load_gray(&img).unwrap();
+    let cfg = lfast::Config { orientation_bins: 0, ..Default::default() };
+    let cfg_path = tmp.path().join("continuous.toml");
+    std::fs::write(&cfg_path, cfg.to_toml_string()).unwrap();
+    let out = tmp.path().join("orb");
+    let o = lfast(&[&"detect", &img, &"--out", &out, &"--detector", &"orb", &"--backend", &"cpu", &"--config", &cfg_path]);
+    assert!(o.status.success(), "{}", show(&o));
+    let f = read_features(&out.join("coins.json"));
+    let params = OrbParams { orientation_bins: 0, ..OrbParams::default() };
+    assert_eq!(lfast::frontend::orb_params(&cfg, 20, 500), params);
+    let (kps, desc) = OrbDetector::new(params).unwrap().detect_and_compute(g.view()).unwrap();
+    assert!(!kps.is_empty());
+    assert_eq!(f.keypoints, kps);
+    let hex = |d: &[lfast::Descriptor]| d.iter().map(lfast::io::hex).collect::<Vec<_>>();
+    assert_eq!(f.descriptors, hex(&desc), "descriptors of continuous (unbinned) orientation");
+    let (_, binned) = OrbDetector::new(OrbParams::default()).unwrap().detect_and_compute(g.view()).unwrap();
+    assert_ne!(f.descriptors, hex(&binned), "binned descriptors differ, so the test tells the two apart");
 }
 
 #[test]

@@ -25,6 +25,7 @@
 //! use the clamped value). Within `0..=255` the two agree and this port is exact;
 //! outside it, this port uses the clamped threshold everywhere.
 
+use crate::cpu::fused::for_each_nonzero;
 use crate::{KeyPoint, Plane};
 
 /// The Bresenham circle of radius 3 as `(dx, dy)`, in OpenCV's `offsets16` order.
@@ -146,6 +147,57 @@ pub fn fast9_and_compute(
 }
 
 
+/// OpenCV's quick rejection at one pixel, the scalar reference of
+/// [`quick_classes_row`]: with class 1 for a circle pixel darker than
+/// `v - t`, 2 for brighter than `v + t`, 0 otherwise, the AND over the eight
+/// opposite pairs `k, k + 8` of `class(k) | class(k + 8)`. Bit 1 (2) set means
+/// the darker (brighter) run count must run; 0 rejects the pixel.
+#[cfg_attr(not(test), allow(dead_code))]
+fn quick_class(data: &[u8], centre: usize, pixel: &[isize; N], threshold: i32) -> u8 {
+    let v = i32::from(data[centre]);
+    let class = |k: usize| {
+        let x = circle(data, centre, pixel, k);
+        (x < v - threshold) as u8 | (((x > v + threshold) as u8) << 1)
+    };
+    (0..8).fold(3, |d, k| d & (class(k) | class(k + 8)))
+}
+
+/// [`quick_class`] of every pixel of row `i` at columns `3..width-3`, into
+/// `out[j - 3]`. Rows `i - 3 ..= i + 3` must exist.
+fn quick_classes_row(data: &[u8], width: usize, i: usize, threshold: u8, out: &mut [u8]) {
+    let n = width - 2 * RADIUS;
+    // the 16 circle pixels of the n centres as shifted slices of their rows
+    let at = |dx: isize, dy: isize| {
+        let start = ((i as isize + dy) * width as isize + RADIUS as isize + dx) as usize;
+        &data[start..start + n]
+    };
+    let ring: [&[u8]; 16] = std::array::from_fn(|k| at(OFFSETS[k].0, OFFSETS[k].1));
+    quick_classes(at(0, 0), &ring, threshold, &mut out[..n]);
+}
+
+crate::cpu::simd::dispatch! {
+    /// The lane-parallel body of [`quick_classes_row`]: `centre[x]` against
+    /// `ring[k][x]`, with saturating bounds (`x < v - t` is `x < sat(v - t)`
+    /// for u8, as no u8 is below 0 or above 255).
+    fn quick_classes(centre: &[u8], ring: &[&[u8]; 16], threshold: u8, out: &mut [u8]) {
+        let n = out.len();
+        let centre = &centre[..n];
+        let ring: [&[u8]; 16] = std::array::from_fn(|k| &ring[k][..n]);
+        for x in 0..n {
+            let v = centre[x];
+            let (lo, hi) = (v.saturating_sub(threshold), v.saturating_add(threshold));
+            let mut d = 3u8;
+            for k in 0..8 {
+                let (a, b) = (ring[k][x], ring[k + 8][x]);
+                let ca = (a < lo) as u8 | (((a > hi) as u8) << 1);
+                let cb = (b < lo) as u8 | (((b > hi) as u8) << 1);
+                d &= ca | cb;
+            }
+            out[x] = d;
+        }
+    }
+}
+
 /// FAST-9 corners of `image`, exactly as OpenCV's
 /// `cv::FAST(image, keypoints, threshold, nonmax, FastFeatureDetector::TYPE_9_16)`:
 /// same keypoints, same order (row by row, left to right).
@@ -175,18 +227,8 @@ pub fn fast9(image: &Plane<u8>, threshold: i32, nonmax: bool) -> Vec<KeyPoint> {
     }
 
     let threshold = threshold.clamp(0, 255);
-    // threshold_tab[x - v + 255]: 1 darker, 2 brighter, 0 similar.
-    let threshold_tab: [u8; 511] = std::array::from_fn(|i| {
-        let diff = i as i32 - 255;
-        if diff < -threshold {
-            1
-        } else if diff > threshold {
-            2
-        } else {
-            0
-        }
-    });
     let pixel = make_offsets(width);
+    let mut classes = vec![0u8; width - 2 * RADIUS];
 
     // Scores of the last three rows (row i - 3 in slot (i - 3) % 3) and their corners' columns.
     let mut scores: [Vec<u8>; 3] = std::array::from_fn(|_| vec![0; width]);
@@ -199,37 +241,21 @@ pub fn fast9(image: &Plane<u8>, threshold: i32, nonmax: bool) -> Vec<KeyPoint> {
 
         if i < height - 3 {
             let (curr, cornerpos) = (&mut scores[slot], &mut corners[slot]);
-            for j in RADIUS..width - RADIUS {
+            // The quick rejection of 32 pixels at a time (AVX2), then the run
+            // counts on the few survivors, in column order as OpenCV.
+            quick_classes_row(data, width, i, threshold as u8, &mut classes);
+            for_each_nonzero(&classes, |k| {
+                let j = RADIUS + k;
                 let centre = i * width + j;
                 let v = i32::from(data[centre]);
-                let v_index = usize::from(data[centre]);
-                let class = |k: usize| {
-                    let x = usize::from(data[centre.wrapping_add_signed(pixel[k])]);
-                    threshold_tab[x + 255 - v_index]
-                };
-
-                let mut d = class(0) | class(8);
-                if d == 0 {
-                    continue;
-                }
-                d &= class(2) | class(10);
-                d &= class(4) | class(12);
-                d &= class(6) | class(14);
-                if d == 0 {
-                    continue;
-                }
-                d &= class(1) | class(9);
-                d &= class(3) | class(11);
-                d &= class(5) | class(13);
-                d &= class(7) | class(15);
-
+                let d = classes[k];
                 if d & 1 != 0 && has_run(data, centre, &pixel, |x| x < v - threshold) {
                     cornerpos.push(j);
                 }
                 if d & 2 != 0 && has_run(data, centre, &pixel, |x| x > v + threshold) {
                     cornerpos.push(j);
                 }
-            }
+            });
             if nonmax {
                 // OpenCV scores each corner as it records it; scoring the row's
                 // corners afterwards stores the same values. A score is in
@@ -517,6 +543,24 @@ mod tests {
                     if naive_is_corner(&img, x, y, t) {
                         prop_assert_eq!(fast_score(&img, x as u32, y as u32, t), naive_score(&img, x, y, t));
                     }
+                }
+            }
+        }
+
+        #[test]
+        fn vector_quick_rejection_matches_scalar(w in 7usize..80, h in 7usize..10, t in 0u8..=255, seed in any::<u64>()) {
+            // widths cross the 16- and 32-lane boundaries; levels near 0 and 255 test the saturation
+            let mut s = seed;
+            let data: Vec<u8> = (0..w * h).map(|_| {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                [0u8, 1, 254, 255, (s >> 40) as u8, (s >> 48) as u8][(s >> 61) as usize % 6]
+            }).collect();
+            let pixel = make_offsets(w);
+            let mut out = vec![9u8; w - 6];
+            for i in 3..h - 3 {
+                quick_classes_row(&data, w, i, t, &mut out);
+                for j in 3..w - 3 {
+                    prop_assert_eq!(out[j - 3], quick_class(&data, i * w + j, &pixel, i32::from(t)), "row {} col {}", i, j);
                 }
             }
         }

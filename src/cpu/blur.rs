@@ -86,6 +86,16 @@ dispatch! {
 }
 
 dispatch! {
+    /// The first weighted row of the vertical pass: `acc[x] = k * t[x]`.
+    fn vset(t: &[u16], k: u32, acc: &mut [u32]) {
+        let acc = &mut acc[..t.len()];
+        for (a, &v) in acc.iter_mut().zip(t) {
+            *a = k * v as u32;
+        }
+    }
+}
+
+dispatch! {
     /// Rounds the Q16 sums to bytes.
     fn vround(acc: &[u32], out: &mut [u8]) {
         for (o, &a) in out.iter_mut().zip(acc) {
@@ -117,10 +127,10 @@ fn blur_n<const N: usize>(src: &Plane<u8>, kernel: &[u32; N], tmp: &mut Vec<u16>
     out.data.par_chunks_mut(w).enumerate().for_each_init(
         || vec![0u32; w],
         |acc, (y, row)| {
-            acc.fill(0);
             for (i, &k) in kernel.iter().enumerate() {
                 let yy = reflect101(y as i32 + i as i32 - r as i32, h as i32);
-                vacc(&tmp[yy * w..(yy + 1) * w], k, acc);
+                let t = &tmp[yy * w..(yy + 1) * w];
+                if i == 0 { vset(t, k, acc) } else { vacc(t, k, acc) }
             }
             vround(acc, row);
         },

@@ -171,7 +171,7 @@ dispatch! {
 /// Calls `f(x)` for each nonzero byte of `v`, skipping zero runs 8 bytes at a
 /// time (flags and classes are mostly zero).
 #[inline]
-fn for_each_nonzero(v: &[u8], mut f: impl FnMut(usize)) {
+pub(crate) fn for_each_nonzero(v: &[u8], mut f: impl FnMut(usize)) {
     let mut x = 0;
     while x + 8 <= v.len() {
         let word = u64::from_le_bytes(v[x..x + 8].try_into().expect("8 bytes"));

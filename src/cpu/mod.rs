@@ -24,7 +24,7 @@ pub mod pyramid;
 pub mod response;
 pub mod rules;
 pub mod select;
-mod simd;
+pub(crate) mod simd;
 
 use crate::config::{Config, DELTA_DEN};
 use crate::error::{Error, Result};

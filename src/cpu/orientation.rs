@@ -3,6 +3,7 @@
 //! bins are shared with the GPU path in [`crate::spec::angle`].
 //! Mirrors shaders/orientation.wgsl.
 
+use super::simd::dispatch;
 use crate::image::Plane;
 pub use crate::spec::angle::{AngleBins, HALF_PATCH, UMAX, angle_deg, compute_umax};
 
@@ -13,26 +14,9 @@ pub fn moments(img: &Plane<u8>, x: u32, y: u32) -> (i32, i32) {
     let inside = x >= HALF_PATCH && y >= HALF_PATCH && x + HALF_PATCH < img.width as i32 && y + HALF_PATCH < img.height as i32;
     let (mut m10, mut m01) = (0i32, 0i32);
     if inside {
-        // Row slices around the centre: the inner loops vectorise.
         let w = img.width as usize;
-        let c = y as usize * w + x as usize;
-        let d = &img.data;
-        let h = HALF_PATCH as usize;
-        for (k, &p) in d[c - h..=c + h].iter().enumerate() {
-            m10 += (k as i32 - HALF_PATCH) * p as i32;
-        }
-        for v in 1..=h {
-            let r = UMAX[v] as usize;
-            let (up, down) = (c - v * w, c + v * w);
-            let (plus, minus) = (&d[down - r..=down + r], &d[up - r..=up + r]);
-            let mut v_sum = 0;
-            for (k, (&p, &m)) in plus.iter().zip(minus).enumerate() {
-                let (p, m) = (p as i32, m as i32);
-                v_sum += p - m;
-                m10 += (k as i32 - r as i32) * (p + m);
-            }
-            m01 += v as i32 * v_sum;
-        }
+        let rows: [&[u8]; 31] = std::array::from_fn(|r| &img.data[(y as usize + r - 15) * w + x as usize - 15..][..31]);
+        (m10, m01) = disc_moments(&rows);
     } else {
         for u in -HALF_PATCH..=HALF_PATCH {
             m10 += u * img.clamped(x + u, y) as i32;
@@ -50,6 +34,57 @@ pub fn moments(img: &Plane<u8>, x: u32, y: u32) -> (i32, i32) {
         }
     }
     (m10, m01)
+}
+
+/// Per disc row `|v|` and lane `k` (column `k - 15`, lane 31 padding): the
+/// column `k - 15` where it lies in the disc (`|k - 15| <= UMAX[|v|]`), else 0;
+/// and 1 where it lies in the disc, else 0.
+const DISC: ([[i32; 32]; 16], [[i32; 32]; 16]) = {
+    let (mut u, mut m) = ([[0i32; 32]; 16], [[0i32; 32]; 16]);
+    let mut v = 0;
+    while v < 16 {
+        let mut k = 0;
+        while k < 31 {
+            let du = k as i32 - HALF_PATCH;
+            if du.abs() <= UMAX[v] {
+                u[v][k] = du;
+                m[v][k] = 1;
+            }
+            k += 1;
+        }
+        v += 1;
+    }
+    (u, m)
+};
+
+dispatch! {
+    /// [`moments`] inside the image from the disc's 31 rows (`rows[v + 15]`,
+    /// 31 bytes from column x-15), 32 i32 lanes per row with the [`DISC`]
+    /// weights: the same integer sums in another order.
+    fn disc_moments(rows: &[&[u8]; 31]) -> (i32, i32) {
+        let load = |r: &[u8]| {
+            let mut p = [0i32; 32];
+            for (q, &v) in p.iter_mut().zip(&r[..31]) {
+                *q = v as i32;
+            }
+            p
+        };
+        let (cols, inside) = (&DISC.0, &DISC.1);
+        let mut m10 = [0i32; 32];
+        let mut m01 = [0i32; 32];
+        let c = load(rows[15]);
+        for k in 0..32 {
+            m10[k] = cols[0][k] * c[k];
+        }
+        for v in 1..16 {
+            let (p, m) = (load(rows[15 + v]), load(rows[15 - v]));
+            for k in 0..32 {
+                m10[k] += cols[v][k] * (p[k] + m[k]);
+                m01[k] += v as i32 * inside[v][k] * (p[k] - m[k]);
+            }
+        }
+        (m10.iter().sum(), m01.iter().sum())
+    }
 }
 
 #[cfg(test)]

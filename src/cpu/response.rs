@@ -2,6 +2,7 @@
 //! 3x3 Sobel, k = 0.04). Mirrors shaders/response.wgsl: the sums are exact
 //! integers, only the final formula is f32, evaluated in the same order.
 
+use super::simd::dispatch;
 use crate::image::Plane;
 
 /// Harris block size.
@@ -35,25 +36,45 @@ pub fn structure_sums(img: &Plane<u8>, x: u32, y: u32) -> (i32, i32, i32) {
     (a, b, c)
 }
 
-/// [`structure_sums`] when the 9x9 footprint lies inside the image: rows by slice.
+/// [`structure_sums`] when the 9x9 footprint lies inside the image.
 #[inline]
 fn structure_sums_inside(d: &[u8], w: usize, x: usize, y: usize) -> (i32, i32, i32) {
-    let r = (BLOCK / 2) as usize;
-    let (mut a, mut b, mut c) = (0i32, 0i32, 0i32);
-    for by in y - r..=y + r {
-        let up = &d[(by - 1) * w + x - r - 1..(by - 1) * w + x + r + 2];
-        let mid = &d[by * w + x - r - 1..by * w + x + r + 2];
-        let down = &d[(by + 1) * w + x - r - 1..(by + 1) * w + x + r + 2];
-        for i in 1..=2 * r + 1 {
-            let p = |row: &[u8], k: usize| row[k] as i32;
-            let ix = (p(mid, i + 1) - p(mid, i - 1)) * 2 + (p(up, i + 1) - p(up, i - 1)) + (p(down, i + 1) - p(down, i - 1));
-            let iy = (p(down, i) - p(up, i)) * 2 + (p(down, i - 1) - p(up, i - 1)) + (p(down, i + 1) - p(up, i + 1));
-            a += ix * ix;
-            b += iy * iy;
-            c += ix * iy;
+    let rows: [&[u8]; 9] = std::array::from_fn(|r| &d[(y + r - 4) * w + x - 4..][..9]);
+    sums_9x9(&rows)
+}
+
+dispatch! {
+    /// The structure-tensor sums from the 9 rows of the footprint (9 bytes
+    /// each, columns x-4..=x+4), 8 lanes wide (lane 7 is padding, kept 0):
+    /// per footprint row, the horizontal difference `h = p[i+1] - p[i-1]` and
+    /// smoothing `s = p[i-1] + 2 p[i] + p[i+1]`; then per block row
+    /// `Ix = h_up + 2 h + h_down` and `Iy = s_down - s_up`, the 3x3 Sobel.
+    fn sums_9x9(rows: &[&[u8]; 9]) -> (i32, i32, i32) {
+        const LIVE: [i32; 8] = [1, 1, 1, 1, 1, 1, 1, 0];
+        let mut h = [[0i32; 8]; 9];
+        let mut s = [[0i32; 8]; 9];
+        for r in 0..9 {
+            let mut p = [0i32; 10];
+            for (q, &v) in p.iter_mut().zip(&rows[r][..9]) {
+                *q = v as i32;
+            }
+            for i in 0..8 {
+                h[r][i] = (p[i + 2] - p[i]) * LIVE[i];
+                s[r][i] = (p[i] + 2 * p[i + 1] + p[i + 2]) * LIVE[i];
+            }
         }
+        let (mut a, mut b, mut c) = ([0i32; 8], [0i32; 8], [0i32; 8]);
+        for by in 1..8 {
+            for i in 0..8 {
+                let ix = h[by - 1][i] + 2 * h[by][i] + h[by + 1][i];
+                let iy = s[by + 1][i] - s[by - 1][i];
+                a[i] += ix * ix;
+                b[i] += iy * iy;
+                c[i] += ix * iy;
+            }
+        }
+        (a.iter().sum(), b.iter().sum(), c.iter().sum())
     }
-    (a, b, c)
 }
 
 /// OpenCV's Harris response from the integer sums, with its scaling.
