@@ -376,6 +376,9 @@ fn config_dict<'py>(py: Python<'py>, cfg: &Config) -> PyResult<Bound<'py, PyDict
 
 // ---------------------------------------------------------------- Detector
 
+/// Keypoints (N x 7 float32) and descriptors (N x 32 uint8).
+type Features<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<u8>>);
+
 /// The native detector; `lfast.Detector` wraps it with OpenCV's types.
 #[pyclass(name = "Detector", module = "lfast._lfast", frozen)]
 struct PyDetector {
@@ -440,7 +443,7 @@ impl PyDetector {
         py: Python<'py>,
         image: &Bound<'py, PyAny>,
         mask: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<u8>>)> {
+    ) -> PyResult<Features<'py>> {
         let img = to_plane(image, "image", false)?;
         let mask = mask_plane(mask)?;
         let (kps, desc) = py

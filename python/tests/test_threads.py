@@ -18,35 +18,43 @@ from conftest import kitti_frames
 
 
 def test_python_runs_while_a_frame_is_processed():
-    """While one thread is inside a long lfast call, another runs Python code.
+    """While one thread is inside an lfast call, another runs Python code.
 
-    Were the GIL held during the call, the main thread could not execute a
-    single bytecode until the call returned, so it would always find the
-    worker's flag cleared. Deterministic: it compares work, not times (the
-    call takes seconds of CPU, the main thread's loop microseconds).
+    The switch interval is raised to 30 s, so the interpreter never takes the
+    GIL from a thread that holds it: were the GIL held during the call, the
+    main thread could not run until the worker had returned and cleared its
+    flag, and would never see it set. With the GIL released, the main thread
+    runs while the worker is inside the call (a fraction of a second of CPU,
+    against microseconds for the main thread's checks). No timing is compared.
     """
     rng = np.random.default_rng(5)
     big = np.kron((rng.random((256, 256)) * 255).astype(np.uint8), np.ones((4, 4), np.uint8))
     det = lfast.Detector(backend="cpu")
-    inside = threading.Event()
+    started, inside = threading.Event(), threading.Event()
     seen = []
 
     def work():
         inside.set()
+        started.set()  # never cleared: the main thread cannot miss it
         try:
             det.detectAndCompute(big)
         finally:
             inside.clear()
 
-    t = threading.Thread(target=work)
-    t.start()
-    inside.wait()
-    time.sleep(0.05)  # let the worker enter the native call
-    for i in range(20):
-        total = sum(range(1000))  # pure Python: needs the GIL
-        seen.append(inside.is_set() and total == 499500)
-        time.sleep(0.001)
-    t.join()
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(30.0)
+    try:
+        t = threading.Thread(target=work)
+        t.start()
+        assert started.wait(timeout=60)
+        time.sleep(0.05)  # let the worker enter the native call
+        for _ in range(20):
+            total = sum(range(1000))  # pure Python: needs the GIL
+            seen.append(inside.is_set() and total == 499500)
+            time.sleep(0.001)
+        t.join(timeout=120)
+    finally:
+        sys.setswitchinterval(old)
     assert any(seen), "no Python code ran while lfast worked: the GIL was not released"
 
 
