@@ -43,11 +43,18 @@ mod detector;
 pub mod error;
 #[cfg(feature = "eval")]
 pub mod eval;
+#[cfg(feature = "vo")]
+pub mod frontend;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod image;
 pub mod io;
 mod keypoint;
+pub mod rng;
+pub mod spec;
+#[cfg(feature = "gpu")]
+#[doc(hidden)]
+pub mod testing;
 #[cfg(feature = "vo")]
 pub mod vo;
 

@@ -269,7 +269,7 @@ fn backends_and_adapters() {
 
     // with a GPU (lavapipe in CI, where REQUIRE_GPU=1 makes its absence a failure):
     // the GPU backend writes the same features as the CPU
-    if lfast::gpu::testing::context().is_none() {
+    if lfast::testing::context().is_none() {
         return;
     }
     assert!(s.contains("backend in use: gpu"), "{s}");
@@ -391,6 +391,33 @@ fn detectors_and_jobs() {
     }
     let o = lfast(&[&"detect", &img, &"--out", &tmp.path().join("x"), &"--jobs", &"0"]);
     assert_eq!(o.status.code(), Some(2), "{}", show(&o));
+}
+
+/// `lfast detect --detector orb` builds ORB from the config as `lfast vo
+/// --features orb` does (lfast::frontend): `orientation_bins` reaches the
+/// descriptors (detect used to ignore it and always bin by 30).
+#[test]
+fn orb_detector_honours_orientation_bins() {
+    use lfast::baseline::orb::{OrbDetector, OrbParams};
+    let tmp = tempfile::tempdir().unwrap();
+    let img = common::data("coins.png");
+    let g = lfast::image::load_gray(&img).unwrap();
+    let cfg = lfast::Config { orientation_bins: 0, ..Default::default() };
+    let cfg_path = tmp.path().join("continuous.toml");
+    std::fs::write(&cfg_path, cfg.to_toml_string()).unwrap();
+    let out = tmp.path().join("orb");
+    let o = lfast(&[&"detect", &img, &"--out", &out, &"--detector", &"orb", &"--backend", &"cpu", &"--config", &cfg_path]);
+    assert!(o.status.success(), "{}", show(&o));
+    let f = read_features(&out.join("coins.json"));
+    let params = OrbParams { orientation_bins: 0, ..OrbParams::default() };
+    assert_eq!(lfast::frontend::orb_params(&cfg, 20, 500), params);
+    let (kps, desc) = OrbDetector::new(params).unwrap().detect_and_compute(g.view()).unwrap();
+    assert!(!kps.is_empty());
+    assert_eq!(f.keypoints, kps);
+    let hex = |d: &[lfast::Descriptor]| d.iter().map(lfast::io::hex).collect::<Vec<_>>();
+    assert_eq!(f.descriptors, hex(&desc), "descriptors of continuous (unbinned) orientation");
+    let (_, binned) = OrbDetector::new(OrbParams::default()).unwrap().detect_and_compute(g.view()).unwrap();
+    assert_ne!(f.descriptors, hex(&binned), "binned descriptors differ, so the test tells the two apart");
 }
 
 #[test]

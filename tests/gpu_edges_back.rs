@@ -6,7 +6,8 @@ use lfast::cpu::{edge_map, hysteresis::hysteresis, rules::rules};
 use lfast::gpu::hysteresis::HysteresisPass;
 use lfast::gpu::lfast::LfastPass;
 use lfast::gpu::rules::RulesPass;
-use lfast::gpu::{Buffers, GpuContext, Pass, testing as t};
+use lfast::gpu::{Buffers, GpuContext, Pass};
+use lfast::testing as t;
 use lfast::image::load_gray;
 use lfast::{Config, Mode, Plane};
 

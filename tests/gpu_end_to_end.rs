@@ -9,7 +9,7 @@ mod common;
 use lfast::config::{Config, Mode};
 use lfast::cpu::CpuDetector;
 use lfast::gpu::detector::{Frame, GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
-use lfast::gpu::testing as t;
+use lfast::testing as t;
 use lfast::image::load_gray;
 use lfast::wgpu;
 use lfast::{KeyPoint, Plane};

@@ -9,7 +9,8 @@ use lfast::gpu::buffers::{counter, indirect};
 use lfast::gpu::corner_nms::CornerNmsPass;
 use lfast::gpu::response::ResponsePass;
 use lfast::gpu::select::SelectPass;
-use lfast::gpu::{Buffers, GpuContext, GpuKeypoint, Pass, testing as t};
+use lfast::gpu::{Buffers, GpuContext, GpuKeypoint, Pass};
+use lfast::testing as t;
 use lfast::image::load_gray;
 use lfast::{Error, Plane};
 

@@ -10,7 +10,8 @@ use lfast::gpu::luma::LumaPass;
 use lfast::gpu::orb::OrbPass;
 use lfast::gpu::orientation::OrientationPass;
 use lfast::gpu::pyramid::PyramidPass;
-use lfast::gpu::{Buffers, GpuContext, GpuKeypoint, Pass, testing as t};
+use lfast::gpu::{Buffers, GpuContext, GpuKeypoint, Pass};
+use lfast::testing as t;
 use lfast::image::luma_bt601;
 use lfast::{Config, Descriptor, Error, Plane, hamming};
 

@@ -2,7 +2,7 @@
 //! (src/cpu/matcher.rs): identical matches, ties included.
 use lfast::cpu::matcher::{self, Match, MatchOptions};
 use lfast::gpu::matcher::GpuMatcher;
-use lfast::gpu::testing as t;
+use lfast::testing as t;
 use lfast::{Backend, Config, Descriptor, Detector};
 
 /// Descriptors with few set bits drawn from a small pool, so that equal

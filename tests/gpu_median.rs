@@ -2,7 +2,8 @@
 use lfast::Config;
 use lfast::cpu::median;
 use lfast::gpu::median::MedianPass;
-use lfast::gpu::{Buffers, Pass, testing as t};
+use lfast::gpu::{Buffers, Pass};
+use lfast::testing as t;
 
 #[test]
 fn median_matches_cpu_on_every_level() {

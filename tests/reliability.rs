@@ -14,7 +14,7 @@ mod fuzz_cases;
 
 use lfast::cpu::CpuDetector;
 use lfast::gpu::detector::{GpuDetector, GpuWorkspace};
-use lfast::gpu::testing as t;
+use lfast::testing as t;
 use lfast::image::load_gray;
 use lfast::{Backend, Config, Detector, Error, GrayView, KeyPoint, Mode, Plane};
 use std::path::{Path, PathBuf};

@@ -288,7 +288,7 @@ fn a_png_declaring_65535x65535_is_refused_without_a_large_allocation() {
 
 #[test]
 fn a_frame_over_the_gpu_limits_runs_on_the_cpu_with_a_warning() {
-    let Some(ctx) = lfast::gpu::testing::context() else {
+    let Some(ctx) = lfast::testing::context() else {
         return;
     };
     // One keypoint slot per pixel (no corner NMS, smallest border): the
@@ -314,8 +314,8 @@ fn a_frame_over_the_gpu_limits_runs_on_the_cpu_with_a_warning() {
     let tmp = tempfile::tempdir().unwrap();
     let toml = tmp.path().join("cfg.toml");
     std::fs::write(&toml, "nms_radius = 0\nborder = 7\nn_features = 300\n").unwrap();
-    let big = lfast::gpu::testing::test_image(side, side, 5);
-    let small = lfast::gpu::testing::test_image(150, 100, 5);
+    let big = lfast::testing::test_image(side, side, 5);
+    let small = lfast::testing::test_image(150, 100, 5);
     lfast::image::save_gray(&big, tmp.path().join("big.png")).unwrap();
     lfast::image::save_gray(&small, tmp.path().join("small.png")).unwrap();
     let cpu = lfast::cpu::CpuDetector::new(cfg.clone()).unwrap();
@@ -449,7 +449,7 @@ fn outputs_are_byte_identical_across_jobs_threads_and_backends() {
     ] {
         std::fs::copy(common::data(name), dir.join(name)).unwrap();
     }
-    let gpu = lfast::gpu::testing::context().is_some();
+    let gpu = lfast::testing::context().is_some();
     let runs: Vec<(&str, Vec<&str>, Vec<(&str, &str)>)> = vec![
         ("jobs1", vec!["--backend", "cpu", "--jobs", "1"], vec![]),
         ("jobs2", vec!["--backend", "cpu", "--jobs", "2"], vec![]),

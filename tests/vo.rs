@@ -146,7 +146,7 @@ fn vo_on_the_first_10_kitti_frames_has_a_bounded_ate() {
 #[test]
 fn gpu_vo_gives_the_cpu_trajectory() {
     let Some(seq) = shared(SEQ) else { return };
-    let Some(_) = lfast::gpu::testing::context() else { return };
+    let Some(_) = lfast::testing::context() else { return };
     let base = VoOptions { frames: Some(3), ..VoOptions::default() };
     let cpu = run_sequence(&seq, &VoOptions { backend: lfast::Backend::Cpu, ..base.clone() }).unwrap();
     let gpu = run_sequence(&seq, &VoOptions { backend: lfast::Backend::Gpu, ..base }).unwrap();

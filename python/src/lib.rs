@@ -45,15 +45,11 @@ fn to_py(e: lfast::Error) -> PyErr {
         | E::InvalidKeypoint { .. }
         | E::Image { .. }
         | E::Pattern { .. } => PyValueError::new_err(msg),
-        E::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
-            PyFileNotFoundError::new_err(msg)
-        }
+        E::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(msg),
         E::Io { .. } => PyOSError::new_err(msg),
-        E::NoAdapter { .. }
-        | E::GpuLimits { .. }
-        | E::GpuOutOfMemory { .. }
-        | E::DeviceLost { .. }
-        | E::Gpu { .. } => GpuError::new_err(msg),
+        E::NoAdapter { .. } | E::GpuLimits { .. } | E::GpuOutOfMemory { .. } | E::DeviceLost { .. } | E::Gpu { .. } => {
+            GpuError::new_err(msg)
+        }
         _ => PyRuntimeError::new_err(msg),
     }
 }
@@ -93,11 +89,7 @@ fn gray_from_3d<T: Sample>(v: ArrayView3<'_, T>) -> Vec<u8> {
     let mut out = Vec::with_capacity(h * w);
     for row in v.outer_iter() {
         for px in row.outer_iter() {
-            out.push(if c == 1 {
-                px[0].to_u8()
-            } else {
-                luma_bt601(px[2].to_u8(), px[1].to_u8(), px[0].to_u8())
-            });
+            out.push(if c == 1 { px[0].to_u8() } else { luma_bt601(px[2].to_u8(), px[1].to_u8(), px[0].to_u8()) });
         }
     }
     out
@@ -105,10 +97,7 @@ fn gray_from_3d<T: Sample>(v: ArrayView3<'_, T>) -> Vec<u8> {
 
 /// Type name of a Python object, for messages.
 fn type_name(obj: &Bound<'_, PyAny>) -> String {
-    obj.get_type()
-        .name()
-        .map(|n| n.to_string())
-        .unwrap_or_else(|_| "?".into())
+    obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into())
 }
 
 /// Any accepted image (uint8 or uint16; gray, BGR or BGRA; any strides) as a
@@ -116,12 +105,9 @@ fn type_name(obj: &Bound<'_, PyAny>) -> String {
 /// `allow_bool` is for masks: uint8 or bool, 2-D only.
 fn to_plane(obj: &Bound<'_, PyAny>, what: &str, allow_bool: bool) -> PyResult<Plane<u8>> {
     let py = obj.py();
-    let arr = obj.cast::<PyUntypedArray>().map_err(|_| {
-        PyTypeError::new_err(format!(
-            "{what} must be a numpy.ndarray, got {}",
-            type_name(obj)
-        ))
-    })?;
+    let arr = obj
+        .cast::<PyUntypedArray>()
+        .map_err(|_| PyTypeError::new_err(format!("{what} must be a numpy.ndarray, got {}", type_name(obj))))?;
     let dt = arr.dtype();
     let (is_u8, is_u16, is_bool) = (
         dt.is_equiv_to(&numpy::dtype::<u8>(py)),
@@ -130,14 +116,8 @@ fn to_plane(obj: &Bound<'_, PyAny>, what: &str, allow_bool: bool) -> PyResult<Pl
     );
     // images: uint8 or uint16; masks: uint8 or bool
     if !(is_u8 || (is_u16 && !allow_bool) || (is_bool && allow_bool)) {
-        let allowed = if allow_bool {
-            "uint8 or bool"
-        } else {
-            "uint8 or uint16"
-        };
-        return Err(PyTypeError::new_err(format!(
-            "{what} must have dtype {allowed}, got {dt}"
-        )));
+        let allowed = if allow_bool { "uint8 or bool" } else { "uint8 or uint16" };
+        return Err(PyTypeError::new_err(format!("{what} must have dtype {allowed}, got {dt}")));
     }
     let shape = arr.shape().to_vec();
     let channels = match (shape.len(), allow_bool) {
@@ -162,9 +142,7 @@ fn to_plane(obj: &Bound<'_, PyAny>, what: &str, allow_bool: bool) -> PyResult<Pl
     let side = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
     let (w, h) = (side(shape[1]), side(shape[0]));
     if w == 0 || h == 0 {
-        return Err(PyValueError::new_err(format!(
-            "{what} is empty (shape {shape:?})"
-        )));
+        return Err(PyValueError::new_err(format!("{what} is empty (shape {shape:?})")));
     }
     check_size(w, h).map_err(|e| PyValueError::new_err(format!("{what}: {e}")))?;
     let data = if shape.len() == 2 {
@@ -199,46 +177,29 @@ const KP_COLS: usize = 7;
 fn keypoints_array<'py>(py: Python<'py>, kps: &[KeyPoint]) -> Bound<'py, PyArray2<f32>> {
     let mut data = Vec::with_capacity(kps.len() * KP_COLS);
     for k in kps {
-        data.extend_from_slice(&[
-            k.pt.x,
-            k.pt.y,
-            k.size,
-            k.angle,
-            k.response,
-            k.octave as f32,
-            k.class_id as f32,
-        ]);
+        data.extend_from_slice(&[k.pt.x, k.pt.y, k.size, k.angle, k.response, k.octave as f32, k.class_id as f32]);
     }
-    Array2::from_shape_vec((kps.len(), KP_COLS), data)
-        .expect("N x 7 elements")
-        .into_pyarray(py)
+    Array2::from_shape_vec((kps.len(), KP_COLS), data).expect("N x 7 elements").into_pyarray(py)
 }
 
 fn descriptors_array<'py>(py: Python<'py>, desc: &[Descriptor]) -> Bound<'py, PyArray2<u8>> {
-    Array2::from_shape_vec((desc.len(), 32), desc.as_flattened().to_vec())
-        .expect("N x 32 bytes")
-        .into_pyarray(py)
+    Array2::from_shape_vec((desc.len(), 32), desc.as_flattened().to_vec()).expect("N x 32 bytes").into_pyarray(py)
 }
 
 /// An N x 7 float32 array back into keypoints; octave and class_id must be integers.
 fn keypoints_from(arr: &Bound<'_, PyAny>) -> PyResult<Vec<KeyPoint>> {
-    let a: PyReadonlyArray2<'_, f32> = arr.extract().map_err(|_| {
-        PyTypeError::new_err("keypoints must be a list of cv2.KeyPoint or an N x 7 float32 array")
-    })?;
+    let a: PyReadonlyArray2<'_, f32> = arr
+        .extract()
+        .map_err(|_| PyTypeError::new_err("keypoints must be a list of cv2.KeyPoint or an N x 7 float32 array"))?;
     let v = a.as_array();
     if v.ncols() != KP_COLS {
-        return Err(PyValueError::new_err(format!(
-            "keypoints must have {KP_COLS} columns, got shape {:?}",
-            v.shape()
-        )));
+        return Err(PyValueError::new_err(format!("keypoints must have {KP_COLS} columns, got shape {:?}", v.shape())));
     }
     let int = |x: f32, i: usize, what: &str| -> PyResult<i32> {
         if x.fract() == 0.0 && x.abs() < 1e9 {
             Ok(x as i32)
         } else {
-            Err(PyValueError::new_err(format!(
-                "keypoint {i}: {what} {x} is not an integer"
-            )))
+            Err(PyValueError::new_err(format!("keypoint {i}: {what} {x} is not an integer")))
         }
     };
     v.outer_iter()
@@ -259,16 +220,10 @@ fn keypoints_from(arr: &Bound<'_, PyAny>) -> PyResult<Vec<KeyPoint>> {
 /// An N x 32 uint8 array as descriptors.
 fn descriptors_from(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Descriptor>> {
     let arr = obj.cast::<PyUntypedArray>().map_err(|_| {
-        PyTypeError::new_err(format!(
-            "{what} must be a numpy.ndarray (N x 32 uint8), got {}",
-            type_name(obj)
-        ))
+        PyTypeError::new_err(format!("{what} must be a numpy.ndarray (N x 32 uint8), got {}", type_name(obj)))
     })?;
     if !arr.dtype().is_equiv_to(&numpy::dtype::<u8>(obj.py())) {
-        return Err(PyTypeError::new_err(format!(
-            "{what} must have dtype uint8, got {}",
-            arr.dtype()
-        )));
+        return Err(PyTypeError::new_err(format!("{what} must have dtype uint8, got {}", arr.dtype())));
     }
     let shape = arr.shape().to_vec();
     let v2 = match shape.as_slice() {
@@ -284,11 +239,7 @@ fn descriptors_from(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Descript
             )));
         }
     };
-    Ok(v2
-        .as_array()
-        .outer_iter()
-        .map(|r| std::array::from_fn(|k| r[k]))
-        .collect())
+    Ok(v2.as_array().outer_iter().map(|r| std::array::from_fn(|k| r[k])).collect())
 }
 
 // ---------------------------------------------------------------- config
@@ -309,17 +260,14 @@ fn json_value(v: &Bound<'_, PyAny>) -> Option<serde_json::Value> {
     if v.is_instance_of::<PyString>() {
         return v.extract::<String>().ok().map(Into::into);
     }
-    v.extract::<f64>()
-        .ok()
-        .map(|f| serde_json::Number::from_f64(f).map_or(serde_json::Value::Null, Into::into))
+    v.extract::<f64>().ok().map(|f| serde_json::Number::from_f64(f).map_or(serde_json::Value::Null, Into::into))
 }
 
 /// Config from keywords: every field of [`Config`] by its name; the others
 /// keep their defaults. An unknown name is a TypeError (as for any Python
 /// call), a bad value a ValueError naming the field.
 fn config_from(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
-    let serde_json::Value::Object(mut fields) =
-        serde_json::to_value(Config::default()).expect("Config serialises")
+    let serde_json::Value::Object(mut fields) = serde_json::to_value(Config::default()).expect("Config serialises")
     else {
         unreachable!("Config is a struct")
     };
@@ -342,16 +290,12 @@ fn config_from(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
         };
         // this field alone, so that a type error is reported against its name
         let one = serde_json::Value::Object([(key.clone(), value.clone())].into_iter().collect());
-        serde_json::from_value::<Config>(one).map_err(|e| {
-            bad(format!(
-                "{e} (got {})",
-                v.repr().map(|r| r.to_string()).unwrap_or_default()
-            ))
-        })?;
+        serde_json::from_value::<Config>(one)
+            .map_err(|e| bad(format!("{e} (got {})", v.repr().map(|r| r.to_string()).unwrap_or_default())))?;
         fields.insert(key, value);
     }
-    let cfg: Config = serde_json::from_value(serde_json::Value::Object(fields))
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let cfg: Config =
+        serde_json::from_value(serde_json::Value::Object(fields)).map_err(|e| PyValueError::new_err(e.to_string()))?;
     cfg.validate().map_err(to_py)?;
     Ok(cfg)
 }
@@ -396,10 +340,7 @@ impl PyDetector {
         let backend: Backend = backend.parse().map_err(to_py)?;
         let cfg = config_from(config)?;
         py.detach(|| -> lfast::Result<Self> {
-            Ok(Self {
-                det: Detector::new(cfg.clone(), backend)?,
-                cpu: CpuDetector::new(cfg)?,
-            })
+            Ok(Self { det: Detector::new(cfg.clone(), backend)?, cpu: CpuDetector::new(cfg)? })
         })
         .map_err(to_py)
     }
@@ -431,9 +372,7 @@ impl PyDetector {
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let img = to_plane(image, "image", false)?;
         let mask = mask_plane(mask)?;
-        let kps = py
-            .detach(|| self.det.detect(img.view(), mask.as_ref().map(Plane::view)))
-            .map_err(to_py)?;
+        let kps = py.detach(|| self.det.detect(img.view(), mask.as_ref().map(Plane::view))).map_err(to_py)?;
         Ok(keypoints_array(py, &kps))
     }
 
@@ -446,12 +385,8 @@ impl PyDetector {
     ) -> PyResult<Features<'py>> {
         let img = to_plane(image, "image", false)?;
         let mask = mask_plane(mask)?;
-        let (kps, desc) = py
-            .detach(|| {
-                self.det
-                    .detect_and_compute(img.view(), mask.as_ref().map(Plane::view))
-            })
-            .map_err(to_py)?;
+        let (kps, desc) =
+            py.detach(|| self.det.detect_and_compute(img.view(), mask.as_ref().map(Plane::view))).map_err(to_py)?;
         Ok((keypoints_array(py, &kps), descriptors_array(py, &desc)))
     }
 
@@ -463,25 +398,15 @@ impl PyDetector {
     ) -> PyResult<Bound<'py, PyArray2<u8>>> {
         let img = to_plane(image, "image", false)?;
         let kps = keypoints_from(keypoints)?;
-        let desc = py
-            .detach(|| self.cpu.compute(img.view(), &kps))
-            .map_err(to_py)?;
+        let desc = py.detach(|| self.cpu.compute(img.view(), &kps)).map_err(to_py)?;
         Ok(descriptors_array(py, &desc))
     }
 
-    fn edges<'py>(
-        &self,
-        py: Python<'py>,
-        image: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray2<u8>>> {
+    fn edges<'py>(&self, py: Python<'py>, image: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray2<u8>>> {
         let img = to_plane(image, "image", false)?;
-        let e = py
-            .detach(|| self.det.edge_image(img.view()))
-            .map_err(to_py)?;
+        let e = py.detach(|| self.det.edge_image(img.view())).map_err(to_py)?;
         let (w, h) = (e.width as usize, e.height as usize);
-        Ok(Array2::from_shape_vec((h, w), e.data)
-            .expect("H x W pixels")
-            .into_pyarray(py))
+        Ok(Array2::from_shape_vec((h, w), e.data).expect("H x W pixels").into_pyarray(py))
     }
 
     fn __repr__(&self) -> String {
@@ -489,11 +414,7 @@ impl PyDetector {
         format!(
             "lfast.Detector(backend='{}', mode='{}', n_features={}, n_levels={})",
             self.det.backend_name(),
-            if c.mode == lfast::Mode::Paper {
-                "paper"
-            } else {
-                "branch"
-            },
+            if c.mode == lfast::Mode::Paper { "paper" } else { "branch" },
             c.n_features,
             c.n_levels
         )
@@ -525,69 +446,33 @@ fn match_arrays<'py>(
         None => 256,
         Some(d) if (0..=256).contains(&d) => d as u32,
         Some(d) => {
-            return Err(PyValueError::new_err(format!(
-                "max_distance must be in 0..=256, got {d}"
-            )));
+            return Err(PyValueError::new_err(format!("max_distance must be in 0..=256, got {d}")));
         }
     };
-    let opts = MatchOptions {
-        cross_check,
-        ratio: ratio.map(|r| r as f32),
-        max_distance,
-    };
-    let m = py
-        .detach(|| match_descriptors(&q, &t, &opts))
-        .map_err(to_py)?;
-    let data: Vec<i32> = m
-        .iter()
-        .flat_map(|m| [m.query as i32, m.train as i32, m.distance as i32])
-        .collect();
-    Ok(Array2::from_shape_vec((m.len(), 3), data)
-        .expect("M x 3")
-        .into_pyarray(py))
+    let opts = MatchOptions { cross_check, ratio: ratio.map(|r| r as f32), max_distance };
+    let m = py.detach(|| match_descriptors(&q, &t, &opts)).map_err(to_py)?;
+    let data: Vec<i32> = m.iter().flat_map(|m| [m.query as i32, m.train as i32, m.distance as i32]).collect();
+    Ok(Array2::from_shape_vec((m.len(), 3), data).expect("M x 3").into_pyarray(py))
 }
 
 /// Hamming distances: an int for two descriptors, else an N x M uint32 matrix.
 #[pyfunction]
-fn hamming<'py>(
-    py: Python<'py>,
-    a: &Bound<'py, PyAny>,
-    b: &Bound<'py, PyAny>,
-) -> PyResult<Py<PyAny>> {
-    let one = |x: &Bound<'py, PyAny>| {
-        x.cast::<PyUntypedArray>()
-            .map(|a| a.ndim() == 1)
-            .unwrap_or(false)
-    };
+fn hamming<'py>(py: Python<'py>, a: &Bound<'py, PyAny>, b: &Bound<'py, PyAny>) -> PyResult<Py<PyAny>> {
+    let one = |x: &Bound<'py, PyAny>| x.cast::<PyUntypedArray>().map(|a| a.ndim() == 1).unwrap_or(false);
     let (da, db) = (descriptors_from(a, "a")?, descriptors_from(b, "b")?);
     if one(a) && one(b) {
-        return Ok(lfast::hamming(&da[0], &db[0])
-            .into_pyobject(py)?
-            .into_any()
-            .unbind());
+        return Ok(lfast::hamming(&da[0], &db[0]).into_pyobject(py)?.into_any().unbind());
     }
-    let data: Vec<u32> = py.detach(|| {
-        da.iter()
-            .flat_map(|x| db.iter().map(move |y| lfast::hamming(x, y)))
-            .collect()
-    });
-    Ok(Array2::from_shape_vec((da.len(), db.len()), data)
-        .expect("N x M")
-        .into_pyarray(py)
-        .into_any()
-        .unbind())
+    let data: Vec<u32> = py.detach(|| da.iter().flat_map(|x| db.iter().map(move |y| lfast::hamming(x, y))).collect());
+    Ok(Array2::from_shape_vec((da.len(), db.len()), data).expect("N x M").into_pyarray(py).into_any().unbind())
 }
 
 /// Reads an image file as 8-bit gray exactly as `lfast detect` does (SPEC 0).
 #[pyfunction]
 fn imread(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyArray2<u8>>> {
-    let p = py
-        .detach(|| lfast::image::load_gray(&path))
-        .map_err(to_py)?;
+    let p = py.detach(|| lfast::image::load_gray(&path)).map_err(to_py)?;
     let (w, h) = (p.width as usize, p.height as usize);
-    Ok(Array2::from_shape_vec((h, w), p.data)
-        .expect("H x W")
-        .into_pyarray(py))
+    Ok(Array2::from_shape_vec((h, w), p.data).expect("H x W").into_pyarray(py))
 }
 
 /// Output suffix of each format, as `lfast detect` names its files.
@@ -618,18 +503,12 @@ fn write_features(
     let kps = keypoints_from(keypoints)?;
     let desc = descriptors_from(descriptors, "descriptors")?;
     if kps.len() != desc.len() {
-        return Err(PyValueError::new_err(format!(
-            "{} keypoints but {} descriptors",
-            kps.len(),
-            desc.len()
-        )));
+        return Err(PyValueError::new_err(format!("{} keypoints but {} descriptors", kps.len(), desc.len())));
     }
     let mut seen: Vec<&str> = Vec::new();
     for f in &formats {
         if suffixes(f).is_none() {
-            return Err(PyValueError::new_err(format!(
-                "unknown format `{f}` (expected json, csv, npy or yaml)"
-            )));
+            return Err(PyValueError::new_err(format!("unknown format `{f}` (expected json, csv, npy or yaml)")));
         }
         if !seen.contains(&f.as_str()) {
             seen.push(f);
@@ -642,10 +521,7 @@ fn write_features(
             PathBuf::from(p)
         };
         if let Some(dir) = base.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|source| lfast::Error::Io {
-                path: dir.to_path_buf(),
-                source,
-            })?;
+            std::fs::create_dir_all(dir).map_err(|source| lfast::Error::Io { path: dir.to_path_buf(), source })?;
         }
         let mut written = Vec::new();
         let mut put = |suffix: &str, bytes: &[u8]| -> lfast::Result<()> {
@@ -656,10 +532,7 @@ fn write_features(
         };
         for f in seen {
             match f {
-                "json" => put(
-                    ".json",
-                    lfast::io::features_json(&image, width, height, &kps, &desc).as_bytes(),
-                )?,
+                "json" => put(".json", lfast::io::features_json(&image, width, height, &kps, &desc).as_bytes())?,
                 "csv" => put(".csv", lfast::io::features_csv(&kps, &desc).as_bytes())?,
                 "npy" => {
                     put(".keypoints.npy", &lfast::io::keypoints_npy(&kps))?;
@@ -679,11 +552,8 @@ fn write_features(
 fn output_paths(base: &str, formats: Vec<String>) -> PyResult<Vec<String>> {
     let mut out = Vec::new();
     for f in &formats {
-        let s = suffixes(f).ok_or_else(|| {
-            PyValueError::new_err(format!(
-                "unknown format `{f}` (expected json, csv, npy or yaml)"
-            ))
-        })?;
+        let s = suffixes(f)
+            .ok_or_else(|| PyValueError::new_err(format!("unknown format `{f}` (expected json, csv, npy or yaml)")))?;
         for x in s {
             let p = format!("{base}{x}");
             if !out.contains(&p) {

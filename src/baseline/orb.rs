@@ -112,7 +112,7 @@ impl OrbDetector {
             })
             .collect();
         corners.sort_by(order);
-        Ok(self.inner.describe_corners(&levels, &corners, 0.0))
+        Ok(self.inner.describe_corners(&levels, &corners, crate::spec::OPENCV_CENTRE))
     }
 }
 

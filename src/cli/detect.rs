@@ -6,10 +6,9 @@
 use super::inputs::{self, Input, Shard};
 use super::report::{self, Reporter};
 use super::{CliError, Common};
-use crate::baseline::fast::fast9_and_compute;
-use crate::baseline::orb::{OrbDetector, OrbParams};
+use crate::baseline::orb::OrbParams;
 use crate::config::Config;
-use crate::cpu::CpuDetector;
+use crate::frontend::{Features, FrontEnd};
 use crate::image::Plane;
 use crate::{Descriptor, KeyPoint};
 use clap::ValueEnum;
@@ -43,17 +42,6 @@ pub(super) enum Format {
     Yaml,
 }
 
-/// Which detector runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub(super) enum DetectorKind {
-    /// L-FAST on the improved Canny edge map, with ORB descriptors
-    Lfast,
-    /// OpenCV-exact FAST-9 on the full image (threshold --fast-threshold), with ORB descriptors
-    Fast,
-    /// The ORB baseline (FAST-9 + Harris over the pyramid), as cv2.ORB_create
-    Orb,
-}
-
 #[derive(clap::Args)]
 pub(super) struct DetectArgs {
     /// Images, directories (searched recursively for image files) or glob patterns
@@ -77,8 +65,8 @@ pub(super) struct DetectArgs {
     #[arg(long, value_name = "K/N")]
     shard: Option<Shard>,
     /// Detector
-    #[arg(long, value_enum, default_value_t = DetectorKind::Lfast)]
-    detector: DetectorKind,
+    #[arg(long, value_enum, default_value_t = FrontEnd::Lfast)]
+    detector: FrontEnd,
     /// FAST threshold of --detector fast and orb
     #[arg(long, default_value_t = 20)]
     fast_threshold: i32,
@@ -86,58 +74,18 @@ pub(super) struct DetectArgs {
     common: Common,
 }
 
-/// A detector of any kind.
-enum Det {
-    Lfast(crate::Detector),
-    Fast { describe: CpuDetector, threshold: i32, cap: u32 },
-    Orb(OrbDetector),
-}
-
-impl Det {
-    fn new(kind: DetectorKind, cfg: Config, fast_threshold: i32, common: &Common) -> Result<Self, CliError> {
-        if kind != DetectorKind::Lfast && common.backend()?.0 == crate::Backend::Gpu {
-            return Err(CliError::Usage(format!(
-                "--detector {} runs on the CPU only (a baseline for comparisons); use --backend cpu or auto",
-                if kind == DetectorKind::Fast { "fast" } else { "orb" }
-            )));
-        }
-        Ok(match kind {
-            DetectorKind::Lfast => Det::Lfast(common.detector(cfg)?),
-            DetectorKind::Fast => {
-                let cap = cfg.n_features;
-                Det::Fast { describe: CpuDetector::new(cfg)?, threshold: fast_threshold, cap }
-            }
-            DetectorKind::Orb => {
-                let d = OrbParams::default();
-                let params = OrbParams {
-                    n_features: if cfg.n_features > 0 { cfg.n_features } else { d.n_features },
-                    n_levels: cfg.n_levels,
-                    scale_factor: cfg.scale_factor,
-                    fast_threshold,
-                    ..d
-                };
-                Det::Orb(OrbDetector::new(params)?)
-            }
-        })
+/// The front end of `--detector`: L-FAST on the chosen backend, the
+/// baselines on the CPU, all from the one config ([`crate::frontend`]).
+fn front_end(kind: FrontEnd, cfg: Config, fast_threshold: i32, common: &Common) -> Result<Features, CliError> {
+    if kind == FrontEnd::Lfast {
+        return Ok(Features::lfast(common.detector(cfg)?));
     }
-
-    fn name(&self) -> &'static str {
-        match self {
-            Det::Lfast(_) => "lfast",
-            Det::Fast { .. } => "fast",
-            Det::Orb(_) => "orb",
-        }
+    if common.backend()?.0 == crate::Backend::Gpu {
+        return Err(CliError::Usage(format!(
+            "--detector {kind} runs on the CPU only (a baseline for comparisons); use --backend cpu or auto"
+        )));
     }
-
-    fn run(&self, img: &Plane<u8>) -> crate::Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
-        match self {
-            Det::Lfast(d) => d.detect_and_compute(img.view(), None),
-            Det::Orb(d) => d.detect_and_compute(img.view()),
-            Det::Fast { describe, threshold, cap } => {
-                fast9_and_compute(img, *threshold, *cap, describe)
-            }
-        }
-    }
+    Ok(Features::cpu(kind, cfg, fast_threshold, OrbParams::default().n_features)?)
 }
 
 /// What one file has become so far, passed between the stages.
@@ -211,11 +159,8 @@ fn write_all(job: &Job, formats: &[Format], st: &Stage) -> crate::Result<()> {
 /// Runs `lfast detect`; `Ok(false)` when some file failed.
 pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
     let cfg = a.common.config()?;
-    let det = Det::new(a.detector, cfg, a.fast_threshold, &a.common)?;
-    let backend = match &det {
-        Det::Lfast(d) => d.backend_name(),
-        _ => "cpu",
-    };
+    let det = front_end(a.detector, cfg, a.fast_threshold, &a.common)?;
+    let backend = det.backend_name();
     let pool = a.common.pool()?;
     super::report::prepare_out_dir(&a.out)?;
     let all = inputs::collect(&a.inputs, a.from_list.as_deref(), &a.out)?;
@@ -272,7 +217,7 @@ pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
             pool.install(|| {
                 rx_dec.into_iter().par_bridge().for_each(|(i, st)| {
                     let st = match st {
-                        Stage::Decoded(img) => match det.run(&img) {
+                        Stage::Decoded(img) => match det.detect_and_compute(&img) {
                             Ok((kps, desc)) => Stage::Detected {
                                 width: img.width,
                                 height: img.height,
@@ -308,7 +253,7 @@ pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
             }
         }
     });
-    let tail = format!("backend {backend}, detector {}, {threads} threads", det.name());
+    let tail = format!("backend {backend}, detector {}, {threads} threads", det.kind());
     let ok = rep.finish("keypoints", &tail);
     report::exit_if_interrupted();
     Ok(ok)

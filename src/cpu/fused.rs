@@ -11,7 +11,7 @@
 //! 5. rules rows -> ruled classes, STRONG seeds; flood fill -> E
 
 use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
-use super::local_threshold::{BandHistograms, Layout};
+use super::local_threshold::{BandHistograms, Cells};
 use super::simd::dispatch;
 use super::{hysteresis, median, rules};
 use crate::image::Plane;
@@ -253,7 +253,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
     );
 
     // 2. gradient, sector, cell histograms of M8, one cell row per task
-    let layout = Layout::new(img.width, img.height);
+    let layout = Cells::new(img.width, img.height);
     s.resize(w * h, 0);
     sec.resize(w * h, 0);
     let d = &*d;
@@ -288,13 +288,14 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
     };
     let t1 = k as u32 + 1;
     let t2 = t1.div_ceil(2); // 2M >= T1  <=>  M >= ceil(T1 / 2)
-    let grid = layout.grid(&cells, img.width, img.height);
-    let nx = grid.xs.len();
-    let thresholds: Vec<Thresholds> = (0..grid.ys.len())
+    let grid = layout.grid(&cells);
+    let win = &grid.layout;
+    let nx = win.xs.len();
+    let thresholds: Vec<Thresholds> = (0..win.ys.len())
         .map(|j| {
             let mut t = Thresholds { hi: vec![0; w], lo: vec![0; w], whi: vec![0; w], wlo: vec![0; w] };
             for x in 0..w {
-                let v3 = grid.stats[j * nx + grid.col_window[x] as usize].v3();
+                let v3 = grid.stats[j * nx + win.col_window[x] as usize].v3();
                 // 300 M >= (100 ± alpha) V3  <=>  M >= ceil((100 ± alpha) V3 / 300)
                 let tl1 = ((100 + alpha_pct) * v3).div_ceil(300).min(255);
                 let tl2 = ((100 - alpha_pct) * v3).div_ceil(300);
@@ -316,7 +317,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
         let su = if y == 0 { &zeros[..] } else { row(y - 1) };
         let sd = if y + 1 == h { &zeros[..] } else { row(y + 1) };
         let (sm, sc) = (row(y), &sec[y * w..(y + 1) * w]);
-        let t = &thresholds[grid.row_window[y] as usize];
+        let t = &thresholds[win.row_window[y] as usize];
         classify_row(su, sm, sd, sc, &t.hi, &t.lo, &t.whi, &t.wlo, out);
         for x in [0, w - 1] {
             let get = |xx: isize, r: &[u32]| if xx < 0 || xx >= w as isize { 0 } else { r[xx as usize] };

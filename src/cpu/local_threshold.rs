@@ -7,6 +7,7 @@
 //! histogram is the sum of its cells'. Min, max and lower median come from it.
 
 use crate::image::Plane;
+pub use crate::spec::windows::{WindowLayout, nearest_windows, window_origins};
 use rayon::prelude::*;
 
 /// Min, max and lower median of `M8` in one window.
@@ -27,70 +28,21 @@ impl WindowStats {
     }
 }
 
-/// The window layout of an image and each window's statistics.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// The window layout of an image ([`crate::spec::windows`]) and each window's statistics.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct WindowGrid {
-    /// Window width `a = max(1, W/5)`.
-    pub a: u32,
-    /// Window height `b = max(1, H/5)`.
-    pub b: u32,
-    /// Window origins along x.
-    pub xs: Vec<u32>,
-    /// Window origins along y.
-    pub ys: Vec<u32>,
-    /// Per window, row-major: window `(i, j)` (x index i, y index j) is `stats[j * xs.len() + i]`.
+    /// Window size, origins and the nearest window of every row and column.
+    pub layout: WindowLayout,
+    /// Per window, row-major: window `(i, j)` (x index i, y index j) is `stats[j * layout.xs.len() + i]`.
     pub stats: Vec<WindowStats>,
-    /// For each column x, the index in `xs` of the window whose centre is nearest.
-    pub col_window: Vec<u32>,
-    /// For each row y, the index in `ys` of the window whose centre is nearest.
-    pub row_window: Vec<u32>,
 }
 
 impl WindowGrid {
     /// `V3` of the window that pixel (x, y) uses.
     #[inline(always)]
     pub fn v3_at(&self, x: u32, y: u32) -> u32 {
-        let i = self.col_window[x as usize] as usize;
-        let j = self.row_window[y as usize] as usize;
-        self.stats[j * self.xs.len() + i].v3()
+        self.stats[self.layout.window_of(x, y)].v3()
     }
-}
-
-/// Window origins along one axis of length `len` for window size `size`:
-/// `0, stride, 2*stride, ...` while the window fits, then one flush with the end.
-///
-/// ```
-/// // KITTI width 1241: a = 248, stride 124
-/// let xs = lfast::cpu::local_threshold::window_origins(1241, 248);
-/// assert_eq!(xs, vec![0, 124, 248, 372, 496, 620, 744, 868, 992, 993]);
-/// ```
-pub fn window_origins(len: u32, size: u32) -> Vec<u32> {
-    let stride = (size / 2).max(1);
-    let mut v: Vec<u32> = (0..).map(|i| i * stride).take_while(|&o| o + size <= len).collect();
-    let last = len - size;
-    if v.last() != Some(&last) {
-        v.push(last);
-    }
-    v
-}
-
-/// For each coordinate `0..len`, the index of the window whose centre
-/// `o + (size-1)/2` is nearest (compared doubled, ties to the lower index).
-pub fn nearest_windows(origins: &[u32], size: u32, len: u32) -> Vec<u32> {
-    (0..len)
-        .map(|c| {
-            let mut best = 0usize;
-            let mut best_d = u32::MAX;
-            for (i, &o) in origins.iter().enumerate() {
-                let d = (2 * c as i64 - (2 * o as i64 + size as i64 - 1)).unsigned_abs() as u32;
-                if d < best_d {
-                    best_d = d;
-                    best = i;
-                }
-            }
-            best as u32
-        })
-        .collect()
 }
 
 /// Min, max and lower median of a histogram with `n > 0` entries.
@@ -119,38 +71,33 @@ fn cuts(origins: &[u32], size: u32, len: u32) -> Vec<u32> {
     c
 }
 
-/// Window layout of a `w x h` image: sizes, origins and the cell cuts.
+/// The window layout of a `w x h` image cut into cells at every window edge.
 #[derive(Clone, Debug)]
-pub(crate) struct Layout {
-    pub a: u32,
-    pub b: u32,
-    pub xs: Vec<u32>,
-    pub ys: Vec<u32>,
+pub(crate) struct Cells {
+    pub windows: WindowLayout,
     /// Cell boundaries along x and y (every window edge, plus 0 and the size).
     pub cx: Vec<u32>,
     pub cy: Vec<u32>,
 }
 
-impl Layout {
+impl Cells {
     pub fn new(w: u32, h: u32) -> Self {
-        let a = (w / 5).max(1);
-        let b = (h / 5).max(1);
-        let xs = window_origins(w, a);
-        let ys = window_origins(h, b);
-        let cx = cuts(&xs, a, w);
-        let cy = cuts(&ys, b, h);
-        Self { a, b, xs, ys, cx, cy }
+        let windows = WindowLayout::new(w, h);
+        let cx = cuts(&windows.xs, windows.a, w);
+        let cy = cuts(&windows.ys, windows.b, h);
+        Self { windows, cx, cy }
     }
 
     /// Sums the cells' histograms (`cells[j][i]`: cell row j, cell column i)
     /// into each window's statistics and builds the grid.
-    pub fn grid(self, cells: &[Vec<[u32; 256]>], w: u32, h: u32) -> WindowGrid {
+    pub fn grid(self, cells: &[Vec<[u32; 256]>]) -> WindowGrid {
         let cell_of = |cuts: &[u32], v: u32| cuts.binary_search(&v).expect("window edges are cut points");
-        let mut stats = Vec::with_capacity(self.xs.len() * self.ys.len());
-        for &y0 in &self.ys {
-            let (j0, j1) = (cell_of(&self.cy, y0), cell_of(&self.cy, y0 + self.b));
-            for &x0 in &self.xs {
-                let (i0, i1) = (cell_of(&self.cx, x0), cell_of(&self.cx, x0 + self.a));
+        let l = &self.windows;
+        let mut stats = Vec::with_capacity(l.len());
+        for &y0 in &l.ys {
+            let (j0, j1) = (cell_of(&self.cy, y0), cell_of(&self.cy, y0 + l.b));
+            for &x0 in &l.xs {
+                let (i0, i1) = (cell_of(&self.cx, x0), cell_of(&self.cx, x0 + l.a));
                 let mut hist = [0u32; 256];
                 for band in &cells[j0..j1] {
                     for cell in &band[i0..i1] {
@@ -162,15 +109,7 @@ impl Layout {
                 stats.push(stats_of(&hist));
             }
         }
-        WindowGrid {
-            col_window: nearest_windows(&self.xs, self.a, w),
-            row_window: nearest_windows(&self.ys, self.b, h),
-            a: self.a,
-            b: self.b,
-            xs: self.xs,
-            ys: self.ys,
-            stats,
-        }
+        WindowGrid { layout: self.windows, stats }
     }
 }
 
@@ -222,7 +161,7 @@ impl BandHistograms {
 /// Window statistics of `M8 = min(M, 255)` (SPEC 5).
 pub fn local_threshold(m: &Plane<u16>) -> WindowGrid {
     let (w, h) = (m.width, m.height);
-    let layout = Layout::new(w, h);
+    let layout = Cells::new(w, h);
     let (cx, cy) = (&layout.cx, &layout.cy);
     // One histogram per cell, one band of cells per task.
     let cells: Vec<Vec<[u32; 256]>> = (0..cy.len() - 1)
@@ -236,7 +175,7 @@ pub fn local_threshold(m: &Plane<u16>) -> WindowGrid {
             band
         })
         .collect();
-    layout.grid(&cells, w, h)
+    layout.grid(&cells)
 }
 
 #[cfg(test)]
@@ -244,28 +183,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn kitti_layout() {
-        // 1241x376: a = 248, b = 75, strides 124 and 37
-        let xs = window_origins(1241, 248);
-        assert_eq!(xs, vec![0, 124, 248, 372, 496, 620, 744, 868, 992, 993]);
-        let ys = window_origins(376, 75);
-        assert_eq!(ys, vec![0, 37, 74, 111, 148, 185, 222, 259, 296, 301]);
-        // Centres: x window i at xs[i] + 123.5, so windows 0 and 1 meet at 185.5.
-        let cw = nearest_windows(&xs, 248, 1241);
-        assert_eq!((cw[0], cw[185], cw[186]), (0, 0, 1));
-        // The last two windows' centres are 1115.5 and 1116.5: column 1116 ties
-        // -> window 8; 1117 and beyond -> 9.
-        assert_eq!((cw[1115], cw[1116], cw[1117], cw[1240]), (8, 8, 9, 9));
-        let rw = nearest_windows(&ys, 75, 376);
-        assert_eq!((rw[0], rw[55], rw[56], rw[375]), (0, 0, 1, 9));
-    }
-
-    #[test]
     fn tiny_images() {
-        assert_eq!(window_origins(1, 1), vec![0]);
-        assert_eq!(window_origins(4, 1), vec![0, 1, 2, 3]);
-        assert_eq!(window_origins(9, 1), (0..9).collect::<Vec<_>>());
-        assert_eq!(window_origins(10, 2), (0..9).collect::<Vec<_>>());
         let m = Plane::from_vec(1, 1, vec![300u16]).unwrap();
         let g = local_threshold(&m);
         assert_eq!(g.stats, vec![WindowStats { min: 255, max: 255, median: 255 }]);
@@ -276,8 +194,8 @@ mod tests {
         // 10x5 image: a = 2, b = 1, windows of 2x1 pixels.
         let m = Plane::from_vec(10, 5, (0..50u16).map(|i| i * 7).collect()).unwrap();
         let g = local_threshold(&m);
-        assert_eq!(g.xs, (0..9).collect::<Vec<_>>());
-        assert_eq!(g.ys, (0..5).collect::<Vec<_>>());
+        assert_eq!(g.layout.xs, (0..9).collect::<Vec<_>>());
+        assert_eq!(g.layout.ys, (0..5).collect::<Vec<_>>());
         // window (0, 0) holds 0 and 7: lower median = 0
         assert_eq!(g.stats[0], WindowStats { min: 0, max: 7, median: 0 });
         // window (3, 4) holds pixels 43, 44 -> 301 and 308, both clipped to 255
@@ -291,13 +209,14 @@ mod tests {
             let data: Vec<u16> = (0..w * h).map(|_| { s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407); ((s >> 40) % 300) as u16 }).collect();
             let m = Plane::from_vec(w, h, data).unwrap();
             let g = local_threshold(&m);
-            for (j, &y0) in g.ys.iter().enumerate() {
-                for (i, &x0) in g.xs.iter().enumerate() {
+            let l = &g.layout;
+            for (j, &y0) in l.ys.iter().enumerate() {
+                for (i, &x0) in l.xs.iter().enumerate() {
                     let mut v: Vec<u8> = vec![];
-                    for y in y0..y0 + g.b { for x in x0..x0 + g.a { v.push(m.at(x, y).min(255) as u8); } }
+                    for y in y0..y0 + l.b { for x in x0..x0 + l.a { v.push(m.at(x, y).min(255) as u8); } }
                     v.sort();
                     let want = WindowStats { min: v[0], max: *v.last().unwrap(), median: v[(v.len() - 1) / 2] };
-                    proptest::prop_assert_eq!(g.stats[j * g.xs.len() + i], want);
+                    proptest::prop_assert_eq!(g.stats[j * l.xs.len() + i], want);
                 }
             }
         }

@@ -30,6 +30,8 @@ use crate::config::{Config, DELTA_DEN};
 use crate::error::{Error, Result};
 use crate::image::{GrayView, Plane};
 use crate::keypoint::{Descriptor, KeyPoint};
+use crate::spec;
+pub use crate::spec::mask::level_mask;
 use gradient::Gradient;
 use local_threshold::WindowGrid;
 use orb::{Pattern, RotatedPatterns};
@@ -62,7 +64,7 @@ pub struct EdgeMap {
 impl EdgeMap {
     /// The edge map of an image without pixels.
     fn empty(w: u32, h: u32) -> Self {
-        let grid = WindowGrid { a: 0, b: 0, xs: vec![], ys: vec![], stats: vec![], col_window: vec![], row_window: vec![] };
+        let grid = WindowGrid::default();
         let g = Gradient { gx2: Plane::new(w, h), gy2: Plane::new(w, h), s: Plane::new(w, h), m: Plane::new(w, h) };
         let e = Plane::new(w, h);
         EdgeMap {
@@ -186,10 +188,7 @@ impl CpuDetector {
         cfg.validate()?;
         let pattern = Pattern::orb();
         let rotated = (cfg.orientation_bins > 0).then(|| RotatedPatterns::new(pattern, cfg.orientation_bins));
-        // A corner's descriptor reads the smoothed image up to the pattern
-        // radius (+3 for the 7x7 blur) and its orientation the radius-15 disc.
-        let mask_radius = (pattern.radius() + 3).max(orientation::HALF_PATCH) as u32;
-        Ok(Self { cfg, pattern, rotated, mask_radius, pool: Default::default() })
+        Ok(Self { cfg, pattern, rotated, mask_radius: spec::mask_radius(), pool: Default::default() })
     }
 
     /// The configuration.
@@ -197,7 +196,8 @@ impl CpuDetector {
         &self.cfg
     }
 
-    /// Distance kept between keypoints and the boundary of a mask, in level pixels.
+    /// Distance kept between keypoints and the boundary of a mask, in level
+    /// pixels ([`spec::mask_radius`]).
     pub fn mask_radius(&self) -> u32 {
         self.mask_radius
     }
@@ -228,7 +228,7 @@ impl CpuDetector {
     pub fn detect(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<Vec<KeyPoint>> {
         self.with_workspace(|ws| {
             let corners = self.find(image, mask, ws)?;
-            Ok(corners.iter().map(|c| self.keypoint(&ws.levels, c, 0.5).0).collect())
+            Ok(corners.iter().map(|c| self.keypoint(&ws.levels, c, spec::LFAST_CENTRE).0).collect())
         })
     }
 
@@ -250,13 +250,13 @@ impl CpuDetector {
     ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
         self.with_workspace(|ws| {
             let corners = self.find(image, mask, ws)?;
-            Ok(self.describe_in(&ws.levels, &corners, 0.5, &mut ws.smooth))
+            Ok(self.describe_in(&ws.levels, &corners, spec::LFAST_CENTRE, &mut ws.smooth))
         })
     }
 
     /// Keypoints (SPEC 10, 11) and descriptors of corners found on `levels`.
-    /// `centre` is where a pixel's position lies within it: 0.5 for L-FAST
-    /// corners (they sit on the gradient grid), 0 for FAST/ORB as OpenCV reports.
+    /// `centre` is where a pixel's position lies within it:
+    /// [`spec::LFAST_CENTRE`] or [`spec::OPENCV_CENTRE`] ([`spec::keypoint_at`]).
     pub(crate) fn describe_corners(
         &self,
         levels: &[Plane<u8>],
@@ -285,7 +285,8 @@ impl CpuDetector {
     }
 
     /// Descriptors of caller-supplied keypoints (from any detector). A keypoint
-    /// is sampled at level `octave`, at pixel `floor(pt / s^octave + 0.25)`,
+    /// is sampled at level `octave`, at pixel `floor(pt / s^octave + 0.25)`
+    /// ([`spec::level_pixel`]),
     /// which is the intended pixel both for lfast's half-pixel convention and
     /// OpenCV's integer one. Orientation is recomputed from the image (the
     /// `angle` field is not read), so the result equals `detect_and_compute`'s.
@@ -303,7 +304,7 @@ impl CpuDetector {
             }
             let l = kp.octave as u32;
             let s = self.cfg.level_scale(l);
-            let (x, y) = ((kp.pt.x as f64 / s + 0.25).floor(), (kp.pt.y as f64 / s + 0.25).floor());
+            let (x, y) = (spec::level_pixel(kp.pt.x, s), spec::level_pixel(kp.pt.y, s));
             let (w, h) = sizes[l as usize];
             if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
                 return Err(bad(format!("position ({}, {}) is outside level {l} ({w}x{h})", kp.pt.x, kp.pt.y)));
@@ -319,7 +320,7 @@ impl CpuDetector {
             let smoothed = smooth_used_levels(levels, at.iter().map(|c| c.level), &mut ws.smooth);
             at.par_iter()
                 .map(|c| {
-                    let (kp, bin) = self.keypoint(levels, c, 0.5);
+                    let (kp, bin) = self.keypoint(levels, c, spec::LFAST_CENTRE);
                     self.describe(&smoothed[c.level as usize], c.x, c.y, kp.angle, bin)
                 })
                 .collect()
@@ -391,14 +392,7 @@ impl CpuDetector {
         let s = self.cfg.level_scale(c.level);
         let (m10, m01) = orientation::moments(&levels[c.level as usize], c.x, c.y);
         let bin = self.rotated.as_ref().map_or(0, |r| r.bins.bin_of(m10, m01));
-        let kp = KeyPoint {
-            pt: glam::Vec2::new(((c.x as f64 + centre) * s) as f32, ((c.y as f64 + centre) * s) as f32),
-            size: (31.0 * s) as f32,
-            angle: orientation::angle_deg(m10, m01),
-            response: c.response,
-            octave: c.level as i32,
-            class_id: -1,
-        };
+        let kp = spec::keypoint_at(c.level, c.x, c.y, s, centre, orientation::angle_deg(m10, m01), c.response);
         (kp, bin)
     }
 
@@ -424,71 +418,9 @@ fn smooth_used_levels<'a>(levels: &[Plane<u8>], used: impl Iterator<Item = u32>,
     &sm.levels[..levels.len()]
 }
 
-/// The mask at a `w x h` level: a level pixel is on only if every input pixel
-/// under its footprint is on, then eroded by `radius` level pixels (square).
-pub fn level_mask(mask: &Plane<u8>, w: u32, h: u32, radius: u32) -> Plane<u8> {
-    let (w0, h0) = (mask.width as u64, mask.height as u64);
-    let span = |i: u64, n: u64, n0: u64| (i * n0 / n, ((i + 1) * n0).div_ceil(n).min(n0).max(i * n0 / n + 1));
-    // footprint min along x for every input row, then along y
-    let mut tmp = vec![0u8; h0 as usize * w as usize];
-    for y in 0..h0 as usize {
-        let row = mask.row(y as u32);
-        for x in 0..w as u64 {
-            let (a, b) = span(x, w as u64, w0);
-            tmp[y * w as usize + x as usize] = row[a as usize..b as usize].iter().all(|&v| v != 0) as u8;
-        }
-    }
-    let mut lv = Plane::<u8>::new(w, h);
-    for y in 0..h as u64 {
-        let (a, b) = span(y, h as u64, h0);
-        for x in 0..w as usize {
-            lv.data[y as usize * w as usize + x] = (a..b).all(|yy| tmp[yy as usize * w as usize + x] != 0) as u8;
-        }
-    }
-    erode(&lv, radius)
-}
-
-/// Square erosion of a 0/1 plane by `r` (min filter), replicate border.
-fn erode(p: &Plane<u8>, r: u32) -> Plane<u8> {
-    if r == 0 {
-        return p.clone();
-    }
-    let r = r as i32;
-    let mut tmp = Plane::<u8>::new(p.width, p.height);
-    for y in 0..p.height as i32 {
-        for x in 0..p.width as i32 {
-            tmp.data[(y * p.width as i32 + x) as usize] = (-r..=r).map(|d| p.clamped(x + d, y)).min().unwrap_or(0);
-        }
-    }
-    let mut out = Plane::<u8>::new(p.width, p.height);
-    for y in 0..p.height as i32 {
-        for x in 0..p.width as i32 {
-            out.data[(y * p.width as i32 + x) as usize] = (-r..=r).map(|d| tmp.clamped(x, y + d)).min().unwrap_or(0);
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn level_mask_footprints_and_erosion() {
-        // one off pixel in the input turns off its level pixel and, after erosion, a square
-        let mut m = Plane::<u8>::new(40, 40);
-        m.data.fill(1);
-        m.data[20 * 40 + 20] = 0;
-        let lv = level_mask(&m, 20, 20, 0);
-        assert_eq!(lv.data.iter().filter(|&&v| v == 0).count(), 1);
-        assert_eq!(lv.at(10, 10), 0);
-        let lv = level_mask(&m, 20, 20, 2);
-        assert_eq!(lv.data.iter().filter(|&&v| v == 0).count(), 25);
-        // a non-integer ratio: footprints overlap, so two level pixels may go off
-        let lv = level_mask(&m, 17, 17, 0);
-        let off = lv.data.iter().filter(|&&v| v == 0).count();
-        assert!((1..=4).contains(&off), "{off}");
-    }
 
     #[test]
     fn mask_size_mismatch_is_an_error() {

@@ -2,109 +2,9 @@
 //! pattern of data/orb_bit_pattern_31.txt (embedded at compile time).
 //! Mirrors shaders/orb.wgsl.
 
-use super::orientation::AngleBins;
-use crate::error::{Error, Result};
 use crate::image::Plane;
 use crate::keypoint::Descriptor;
-use std::sync::OnceLock;
-
-/// The pattern table as shipped: 256 rows `x1 y1 x2 y2`.
-pub const PATTERN_TEXT: &str = include_str!("../../data/orb_bit_pattern_31.txt");
-
-/// One test: bit = `I(a) < I(b)` with `a = (x1, y1)`, `b = (x2, y2)` offsets.
-pub type Pair = [i8; 4];
-
-/// The 256 tests of rBRIEF.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Pattern {
-    /// Tests in bit order.
-    pub pairs: Vec<Pair>,
-}
-
-impl Pattern {
-    /// Parses the text format: `#` comments, blank lines, then 256 rows of four integers.
-    pub fn parse(text: &str) -> Result<Self> {
-        let mut pairs = Vec::with_capacity(256);
-        for (i, line) in text.lines().enumerate() {
-            let line = line.trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
-            }
-            let bad = |reason: String| Error::Pattern { line: i + 1, reason };
-            let v: Vec<i8> = line
-                .split_whitespace()
-                .map(|t| t.parse::<i8>().map_err(|e| bad(format!("`{t}`: {e}"))))
-                .collect::<Result<_>>()?;
-            if v.len() != 4 {
-                return Err(bad(format!("expected 4 numbers, found {}", v.len())));
-            }
-            if v.iter().any(|c| c.unsigned_abs() > 15) {
-                return Err(bad("offset outside the 31x31 patch".into()));
-            }
-            pairs.push([v[0], v[1], v[2], v[3]]);
-        }
-        if pairs.len() != 256 {
-            return Err(Error::Pattern { line: text.lines().count(), reason: format!("expected 256 rows, found {}", pairs.len()) });
-        }
-        Ok(Self { pairs })
-    }
-
-    /// The embedded ORB pattern (checked by a test, so parsing cannot fail).
-    pub fn orb() -> &'static Pattern {
-        static P: OnceLock<Pattern> = OnceLock::new();
-        P.get_or_init(|| Pattern::parse(PATTERN_TEXT).expect("data/orb_bit_pattern_31.txt is valid (tested)"))
-    }
-
-    /// The pattern rotated by `angle` radians, offsets rounded half to even
-    /// (OpenCV's cvRound): `x' = x cos - y sin`, `y' = x sin + y cos`.
-    pub fn rotated(&self, angle: f64) -> Vec<Pair> {
-        let (s, c) = angle.sin_cos();
-        self.map_points(|x, y| {
-            let (x, y) = (x as f64, y as f64);
-            ((x * c - y * s).round_ties_even() as i8, (x * s + y * c).round_ties_even() as i8)
-        })
-    }
-
-    /// The pairs with `f` applied to both points of each.
-    fn map_points(&self, f: impl Fn(i8, i8) -> (i8, i8)) -> Vec<Pair> {
-        self.pairs
-            .iter()
-            .map(|p| {
-                let (ax, ay) = f(p[0], p[1]);
-                let (bx, by) = f(p[2], p[3]);
-                [ax, ay, bx, by]
-            })
-            .collect()
-    }
-
-    /// Largest distance of any (rotated) sample from the keypoint, rounded up.
-    pub fn radius(&self) -> i32 {
-        self.pairs
-            .iter()
-            .flat_map(|p| [(p[0], p[1]), (p[2], p[3])])
-            .map(|(x, y)| ((x as f64).hypot(y as f64) + 0.5).ceil() as i32)
-            .max()
-            .unwrap_or(0)
-    }
-}
-
-/// The pattern pre-rotated to every bin centre (SPEC 11, `orientation_bins`).
-#[derive(Clone, Debug)]
-pub struct RotatedPatterns {
-    /// The bins the tables belong to.
-    pub bins: AngleBins,
-    /// `tables[b]` is the pattern rotated to bin b's centre angle.
-    pub tables: Vec<Vec<Pair>>,
-}
-
-impl RotatedPatterns {
-    /// Tables for `bins` (>= 1) bins.
-    pub fn new(pattern: &Pattern, bins: u32) -> Self {
-        let bins = AngleBins::new(bins);
-        let tables = (0..bins.len() as u32).map(|b| pattern.rotated(bins.centre(b))).collect();
-        Self { bins, tables }
-    }
-}
+pub use crate::spec::pattern::{PATTERN_TEXT, Pair, Pattern, RotatedPatterns};
 
 /// No rotated offset exceeds this (|x|, |y| <= 15 rotated stay within 15 * sqrt(2)).
 const REACH: i32 = 22;
@@ -154,25 +54,6 @@ pub fn describe_continuous(smoothed: &Plane<u8>, x: u32, y: u32, angle_deg: f32,
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn embedded_pattern_parses() {
-        let p = Pattern::orb();
-        assert_eq!(p.pairs.len(), 256);
-        assert_eq!(p.pairs[0], [8, -3, 9, 5]);
-        assert_eq!(p.pairs[1], [4, 2, 7, -12]);
-        assert!(p.radius() <= 19);
-    }
-
-    #[test]
-    fn parse_errors_name_the_line() {
-        let e = Pattern::parse("# c\n1 2 3\n").unwrap_err().to_string();
-        assert!(e.contains("line 2") && e.contains("4 numbers"), "{e}");
-        let e = Pattern::parse("1 2 3 x\n").unwrap_err().to_string();
-        assert!(e.contains("line 1"), "{e}");
-        let e = Pattern::parse("1 2 3 4\n").unwrap_err().to_string();
-        assert!(e.contains("256 rows"), "{e}");
-    }
 
     #[test]
     fn one_bit_by_hand() {

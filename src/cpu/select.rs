@@ -22,22 +22,7 @@ pub fn order(a: &Corner, b: &Corner) -> Ordering {
     b.response.total_cmp(&a.response).then(a.level.cmp(&b.level)).then(a.y.cmp(&b.y)).then(a.x.cmp(&b.x))
 }
 
-/// Quotas for `n` features over levels of the given sizes, proportional to
-/// area: `floor(n * A_l / sum A)`, the remainder handed out one by one from level 0.
-///
-/// ```
-/// let q = lfast::cpu::select::level_quotas(100, &[(100, 100), (50, 50)]);
-/// assert_eq!(q, vec![80, 20]);
-/// ```
-pub fn level_quotas(n: u32, sizes: &[(u32, u32)]) -> Vec<u32> {
-    let areas: Vec<u64> = sizes.iter().map(|&(w, h)| w as u64 * h as u64).collect();
-    let total: u64 = areas.iter().sum::<u64>().max(1);
-    let mut q: Vec<u32> = areas.iter().map(|&a| (n as u64 * a / total) as u32).collect();
-    // Each floor loses less than one, so the remainder is below the level count.
-    let rest = (n - q.iter().sum::<u32>()) as usize;
-    q.iter_mut().take(rest).for_each(|v| *v += 1);
-    q
-}
+pub use crate::spec::quotas::level_quotas;
 
 /// ORB-SLAM's `DistributeOctTree` on one level: split the region into nodes
 /// (initially `round(W/H)` vertical strips), split every node holding more

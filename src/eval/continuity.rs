@@ -5,7 +5,8 @@
 use super::metrics::{EdgeStats, edge_survival};
 use super::noise::noisy_images;
 use super::plot::{Bars, Panel, figure};
-use super::report::{Csv, csv_f, num, pct, table, write_section};
+use super::format::{Csv, csv_f, num, pct, table};
+use super::output::write_section;
 use super::{Options, Result, Suite, create_dir, mean};
 use crate::baseline::canny::{CannyParams, canny};
 use crate::config::Config;

@@ -6,11 +6,39 @@
 
 use super::metrics::{Lighting, edge_survival, keypoint_survival};
 use super::plot::{Bars, Panel, figure};
-use super::report::{Csv, IllumSummary, SurvivalMean, csv_f, num, pct, table, write_section};
+use super::format::{Csv, csv_f, num, pct, table};
+use super::output::write_section;
+use serde::{Deserialize, Serialize};
 use super::{Detectors, NamedImage, Options, Result, Suite, colour_of, kitti_frames, label, load_standard, mean, stem};
 use crate::config::Config;
 use crate::cpu::CpuDetector;
 use crate::image::Plane;
+
+/// Mean survival of one method under one brightness change.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SurvivalMean {
+    /// Method key (`canny`, `improved-canny`, `fast9`, `lfast-...`).
+    pub key: String,
+    /// `edges` or `keypoints`.
+    pub kind: String,
+    /// The change (`gamma 0.5`, ...).
+    pub transform: String,
+    /// Mean survival over the images.
+    pub survival: f64,
+    /// Mean of count after / count before.
+    pub count_ratio: f64,
+}
+
+/// What the illumination suite leaves for the report.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct IllumSummary {
+    /// Standard images used.
+    pub standard_images: usize,
+    /// KITTI frames used.
+    pub kitti_frames: usize,
+    /// Per method and change.
+    pub means: Vec<SurvivalMean>,
+}
 
 /// Edge-pixel tolerance (Chebyshev), pixels.
 pub const EDGE_RADIUS: u32 = 1;

@@ -24,10 +24,13 @@
 //! is deterministic; the noise is seeded.
 
 pub mod continuity;
+pub mod decision;
+pub mod format;
 pub mod illumination;
 pub mod kitti;
 pub mod metrics;
 pub mod noise;
+pub mod output;
 pub mod plot;
 pub mod repeatability;
 pub mod report;
@@ -216,7 +219,10 @@ pub fn mode_name(m: Mode) -> &'static str {
 /// The FAST threshold of every FAST-9 and ORB run (SPEC 12, as OpenCV).
 pub const FAST_THRESHOLD: i32 = 20;
 
-/// The detectors compared by the keypoint suites, built once.
+/// The detectors compared by the keypoint suites, built once. ORB comes from
+/// [`crate::frontend`] like the CLI's and VO's; FAST-9 keeps every keypoint
+/// in a total order ([`sort_by_response`]) so the suites' top-N cuts are
+/// deterministic, where [`crate::frontend::Features::Fast`] keeps detection order.
 #[derive(Debug)]
 pub struct Detectors {
     /// The L-FAST variants, in [`Variant::ALL`] order.
@@ -234,7 +240,7 @@ impl Detectors {
         Ok(Detectors {
             lfast,
             describer: CpuDetector::new(Config::default())?,
-            orb: OrbDetector::new(OrbParams::default())?,
+            orb: Self::orb_with(OrbParams::default().n_features)?,
         })
     }
 
@@ -252,9 +258,12 @@ impl Detectors {
         Ok((kps, desc))
     }
 
-    /// ORB with a budget of `n` features (`cv2.ORB_create(nfeatures=n)`).
+    /// ORB with a budget of `n` features (`cv2.ORB_create(nfeatures=n)`),
+    /// built as every front end builds it ([`crate::frontend::orb_params`]) from
+    /// the default config.
     pub fn orb_with(n: u32) -> Result<OrbDetector> {
-        Ok(OrbDetector::new(OrbParams { n_features: n, ..OrbParams::default() })?)
+        let cfg = Config { n_features: n, ..Config::default() };
+        Ok(OrbDetector::new(crate::frontend::orb_params(&cfg, FAST_THRESHOLD, n))?)
     }
 }
 

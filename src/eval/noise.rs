@@ -4,7 +4,8 @@
 
 use super::metrics::{psnr, salt_and_pepper, seed_for, snr};
 use super::plot::{Bars, Panel, figure};
-use super::report::{Csv, csv_f, num, table, write_section};
+use super::format::{Csv, csv_f, num, table};
+use super::output::write_section;
 use super::{NamedImage, Options, Result, Suite, load_standard, mean};
 use crate::config::{Config, DELTA_DEN};
 use crate::cpu::blur::{gaussian_blur, gaussian_kernel_q8};

@@ -5,13 +5,43 @@
 
 use super::metrics::{PairScore, read_homography, score_pair};
 use super::plot::{Panel, Series, figure};
-use super::report::{Csv, RepeatMean, RepeatSummary, csv_f, pct, table, write_section};
+use super::format::{Csv, csv_f, pct, table};
+use super::output::write_section;
+use serde::{Deserialize, Serialize};
 use super::{Detectors, EvalError, Options, Result, Suite, colour_of, image_files, label, mean, stem};
 use crate::image::Plane;
 use crate::keypoint::{Descriptor, KeyPoint};
 use nalgebra::Matrix3;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+/// Mean repeatability and matching score of one detector at one budget.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RepeatMean {
+    /// Detector key.
+    pub key: String,
+    /// Top-N budget, `None` = every keypoint.
+    pub budget: Option<u32>,
+    /// Mean over every pair of every scene.
+    pub repeatability: f64,
+    /// Mean over every pair of every scene.
+    pub matching_score: f64,
+    /// Mean keypoints in image 1 of the pairs.
+    pub keypoints: f64,
+}
+
+/// What the repeatability suite leaves for the report.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RepeatSummary {
+    /// Scene names.
+    pub scenes: Vec<String>,
+    /// Pairs per scene.
+    pub pairs: usize,
+    /// Budgets evaluated besides "all".
+    pub budgets: Vec<u32>,
+    /// Per detector and budget.
+    pub means: Vec<RepeatMean>,
+}
 
 /// Tolerance of a correspondence, pixels (in image n).
 pub const EPS: f64 = 2.5;

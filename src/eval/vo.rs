@@ -4,7 +4,8 @@
 //! after SE(3) and Sim(3) alignment, counts and times. Everything on the CPU.
 
 use super::plot::{Bars, Panel, figure};
-use super::report::{Csv, csv_f, num, table, write_section};
+use super::format::{Csv, csv_f, num, table};
+use super::output::write_section;
 use super::{EvalError, Options, Result, Suite, Variant, colour_of, label};
 use crate::vo::{FrontEnd, SuiteTable, VoOptions};
 use serde::{Deserialize, Serialize};

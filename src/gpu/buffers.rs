@@ -5,8 +5,8 @@ use super::kernel::DYNAMIC_STRIDE;
 use super::kernel::init_buffer;
 use super::layout::{FrameLayout, MAX_LEVELS, MAX_WINDOWS_PER_AXIS, TILE_ROW};
 use crate::config::Config;
-use crate::cpu::orb::{Pattern, RotatedPatterns};
-use crate::cpu::orientation::AngleBins;
+use crate::spec::angle::AngleBins;
+use crate::spec::pattern::{Pattern, RotatedPatterns};
 use crate::error::{Error, Result};
 use bytemuck::{Pod, Zeroable};
 

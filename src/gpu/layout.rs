@@ -3,16 +3,12 @@
 //! that carries it all to the shaders (mirrors shaders/common.wgsl).
 
 use crate::config::{Config, DELTA_DEN, Mode};
-use crate::cpu::local_threshold::{nearest_windows, window_origins};
-use crate::cpu::select::level_quotas;
+use crate::spec::{WindowLayout, level_quotas};
 use bytemuck::{Pod, Zeroable};
 
 /// Most pyramid levels the shaders handle (as `Config::validate` allows).
 pub const MAX_LEVELS: usize = 32;
-/// Most SPEC 5 windows along one axis of any length: `a = max(1, L/5)` with
-/// stride `max(1, a/2)` gives L windows for L < 10, L-1 for L < 15, L-2 for
-/// L < 20 (17 at L = 19) and at most 11 from L = 20 on (a test checks every L).
-pub const MAX_WINDOWS_PER_AXIS: usize = 17;
+pub use crate::spec::windows::MAX_WINDOWS_PER_AXIS;
 /// Most workgroups per row of the tile list (WebGPU's guaranteed per-dimension limit).
 pub const TILE_ROW: u32 = 65535;
 /// Side of the 2D workgroups of per-pixel passes.
@@ -73,23 +69,6 @@ pub struct Params {
     pub _pad: [u32; 2],
 }
 
-/// One level's window grid (SPEC 5), as the CPU reference lays it out.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct LevelGrid {
-    /// Window width.
-    pub a: u32,
-    /// Window height.
-    pub b: u32,
-    /// Window origins along x.
-    pub xs: Vec<u32>,
-    /// Window origins along y.
-    pub ys: Vec<u32>,
-    /// Nearest window per column.
-    pub col_window: Vec<u32>,
-    /// Nearest window per row.
-    pub row_window: Vec<u32>,
-}
-
 /// The layout of one frame size under one config.
 #[derive(Clone, Debug)]
 pub struct FrameLayout {
@@ -102,7 +81,7 @@ pub struct FrameLayout {
     /// Pixels of all levels, not saturated: the GPU path refuses layouts over `u32::MAX`.
     pub total_px_exact: u64,
     /// Per level window grid.
-    pub grids: Vec<LevelGrid>,
+    pub grids: Vec<WindowLayout>,
     /// Index of each level's first window in the window-statistics buffer.
     pub window_offsets: Vec<u32>,
     /// Windows of all levels.
@@ -134,17 +113,8 @@ impl FrameLayout {
         let (b, r) = (cfg.border, cfg.nms_radius);
         let mut capacity: u64 = 0;
         for (l, &(w, h)) in sizes.iter().enumerate() {
-            let (a, bb) = ((w / 5).max(1), (h / 5).max(1));
-            let xs = window_origins(w, a);
-            let ys = window_origins(h, bb);
-            let g = LevelGrid {
-                a,
-                b: bb,
-                col_window: nearest_windows(&xs, a, w),
-                row_window: nearest_windows(&ys, bb, h),
-                xs,
-                ys,
-            };
+            let g = WindowLayout::new(w, h);
+            let (a, bb) = (g.a, g.b);
             p.levels[l] = [w, h, offsets[l], total_windows];
             let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
             p.tiles[l] = [p.total_tiles, tx, ty, 0];
@@ -239,12 +209,6 @@ impl FrameLayout {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn no_axis_has_more_than_max_windows() {
-        let worst = (1..=crate::image::MAX_SIDE).map(|l| window_origins(l, (l / 5).max(1)).len()).max().unwrap();
-        assert_eq!(worst, MAX_WINDOWS_PER_AXIS);
-    }
 
     #[test]
     fn atlas_offsets_and_capacity() {

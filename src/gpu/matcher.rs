@@ -14,7 +14,7 @@
 
 use super::context::GpuContext;
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b, full_source, init_buffer};
-use crate::cpu::matcher::{Match, MatchOptions, NO_INDEX};
+use crate::spec::matching::{Match, MatchOptions, NO_INDEX};
 use crate::error::{Error, Result};
 use crate::keypoint::Descriptor;
 use std::sync::Mutex;

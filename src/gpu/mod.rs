@@ -3,7 +3,9 @@
 //!
 //! - [`GpuContext`]: the device, from the environment or an embedder's.
 //! - [`Buffers`]: every buffer of one frame size, by name.
-//! - one `*Pass` struct per stage, implementing [`Pass`].
+//! - one `*Pass` struct per stage, implementing [`Pass`]; [`stages`] lists
+//!   them once, in recording order, and [`SHADERS`] follows from that list.
+//! - [`GpuDetector`] chains them; [`readback`] brings a frame's results back.
 
 pub mod blur;
 pub mod buffers;
@@ -27,17 +29,19 @@ pub mod orientation;
 pub mod otsu;
 pub mod pass;
 pub mod pyramid;
+pub mod readback;
 pub mod response;
 pub mod rules;
 pub mod select;
-#[doc(hidden)]
-pub mod testing;
+pub mod stages;
 
 pub use buffers::{Buffers, GpuKeypoint};
 pub use context::{GpuContext, GpuOptions, list_adapters};
-pub use detector::{Frame, GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
+pub use detector::{GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
+pub use readback::{Frame, Ticket};
 pub use layout::FrameLayout;
 pub use pass::Pass;
+pub use stages::{SHADERS, STAGES};
 
 use kernel::Binding;
 
@@ -51,17 +55,3 @@ pub struct ShaderInfo {
     /// Every binding the shader declares.
     pub bindings: &'static [Binding],
 }
-
-macro_rules! shaders {
-    ($($m:ident),* $(,)?) => {
-        /// Every stage shader, in pipeline order.
-        pub const SHADERS: &[ShaderInfo] = &[
-            $(ShaderInfo { name: stringify!($m), source: $m::SOURCE, bindings: $m::BINDINGS }),*
-        ];
-    };
-}
-
-shaders!(
-    luma, pyramid, median, gradient, nms, histogram, otsu, local_threshold, classify, rules, hysteresis, lfast, response,
-    corner_nms, select, blur, orientation, orb, matcher,
-);

@@ -205,12 +205,12 @@ pub fn ate(gt: &[Pose], est: &[Pose], align: Align) -> Result<Ate, VoError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vo::geometry::SplitMix64;
+    use crate::rng::SplitMix64;
     use nalgebra::Rotation3;
 
     fn cloud(n: usize, seed: u64) -> Vec<Vector3<f64>> {
         let mut r = SplitMix64::new(seed);
-        (0..n).map(|_| Vector3::new(r.unit() * 10.0, r.unit() * 3.0 - 1.0, r.unit() * 50.0)).collect()
+        (0..n).map(|_| Vector3::new(r.next_f64() * 10.0, r.next_f64() * 3.0 - 1.0, r.next_f64() * 50.0)).collect()
     }
 
     #[test]

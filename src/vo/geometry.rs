@@ -119,35 +119,7 @@ pub struct Essential {
     pub iterations: usize,
 }
 
-/// SplitMix64: a small, well-mixed, seedable generator (reproducible runs).
-#[derive(Clone, Debug)]
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// Seeded generator.
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `0..n` (`n > 0`), by Lemire's multiply-shift.
-    pub fn below(&mut self, n: usize) -> usize {
-        ((self.next_u64() as u128 * n as u128) >> 64) as usize
-    }
-
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+pub use crate::rng::SplitMix64;
 
 /// Inliers of `e`: Sampson distance below `thr2 * sigma[i]^2` (`thr2` in
 /// normalised units squared). Returns the mask and its count.
@@ -446,7 +418,7 @@ mod tests {
         let mut rng = SplitMix64::new(seed);
         let (mut a, mut b) = (Vec::new(), Vec::new());
         while a.len() < n {
-            let p = Vector3::new(rng.unit() * 20.0 - 10.0, rng.unit() * 8.0 - 4.0, 4.0 + rng.unit() * 30.0);
+            let p = Vector3::new(rng.next_f64() * 20.0 - 10.0, rng.next_f64() * 8.0 - 4.0, 4.0 + rng.next_f64() * 30.0);
             let q = r * p + t;
             if q.z > 0.5 {
                 a.push(p.xy() / p.z);
@@ -465,7 +437,7 @@ mod tests {
         let mut outlier = vec![false; x1.len()];
         for i in (0..x1.len()).filter(|i| i % 10 < 3) {
             x2[i] = loop {
-                let c = Point::new(rng.unit() - 0.5, rng.unit() * 0.6 - 0.3);
+                let c = Point::new(rng.next_f64() - 0.5, rng.next_f64() * 0.6 - 0.3);
                 if sampson(&e, &x1[i], &c) > far {
                     break c;
                 }
@@ -532,7 +504,7 @@ mod tests {
         let mut rng = SplitMix64::new(98);
         // 0.5 px of noise on the inliers (focal 700)
         for p in x1.iter_mut().chain(x2.iter_mut()) {
-            *p += Vector2::new(rng.unit() - 0.5, rng.unit() - 0.5) / 700.0;
+            *p += Vector2::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5) / 700.0;
         }
         let est = ransac_essential(&x1, &x2, None, 700.0, &RansacOptions { threshold_px: 1.5, ..Default::default() })
             .unwrap();
@@ -574,7 +546,7 @@ mod tests {
         let (mut x1, mut x2) = scene(300, 11, &r, &t);
         let mut rng = SplitMix64::new(12);
         for p in x1.iter_mut().chain(x2.iter_mut()) {
-            *p += Vector2::new(rng.unit() - 0.5, rng.unit() - 0.5) * (2.0 / 700.0); // +-1 px
+            *p += Vector2::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5) * (2.0 / 700.0); // +-1 px
         }
         let all = vec![true; 300];
         let lin = recover_pose(&eight_point(&x1, &x2).unwrap(), &x1, &x2, &all, 1e9).unwrap();
@@ -611,8 +583,8 @@ mod tests {
             let (x, y) = (a.below(7), b.below(7));
             assert_eq!(x, y);
             assert!(x < 7);
-            let u = a.unit();
-            b.unit();
+            let u = a.next_f64();
+            b.next_f64();
             assert!((0.0..1.0).contains(&u));
         }
     }

@@ -4,45 +4,17 @@
 use super::geometry::{self, Point, RansacOptions};
 use super::kitti::{self, Calib};
 use super::{Pose, VoError};
-use crate::baseline::fast::fast9_and_compute;
-use crate::baseline::orb::{OrbDetector, OrbParams};
 use crate::config::Config;
-use crate::cpu::CpuDetector;
 use crate::cpu::matcher::{self, Match, MatchOptions};
+use crate::frontend::Features;
 use crate::gpu::matcher::GpuMatcher;
 use crate::gpu::{GpuContext, GpuOptions};
-use crate::image::Plane;
 use crate::{Backend, Descriptor, Detector, KeyPoint};
 use nalgebra::{Matrix3, Vector3};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The feature front end.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum FrontEnd {
-    /// L-FAST on the improved Canny edge map, ORB descriptors (GPU or CPU)
-    Lfast,
-    /// OpenCV-exact FAST-9 (with non-maximum suppression) on the full image, our ORB descriptors
-    Fast,
-    /// The ORB baseline (as cv2.ORB_create)
-    Orb,
-}
-
-impl FrontEnd {
-    /// All three, in the order of the paper's tables.
-    pub const ALL: [FrontEnd; 3] = [FrontEnd::Lfast, FrontEnd::Fast, FrontEnd::Orb];
-}
-
-impl std::fmt::Display for FrontEnd {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            FrontEnd::Lfast => "lfast",
-            FrontEnd::Fast => "fast",
-            FrontEnd::Orb => "orb",
-        })
-    }
-}
+pub use crate::frontend::FrontEnd;
 
 /// Where matching runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -191,32 +163,6 @@ pub fn list_frames(seq: &Path) -> Result<Vec<PathBuf>, VoError> {
     Ok(v)
 }
 
-/// A front end ready to run.
-enum Features {
-    Lfast(Box<Detector>),
-    Fast { describe: CpuDetector, threshold: i32, cap: u32 },
-    Orb(OrbDetector),
-}
-
-impl Features {
-    fn detect(&self, img: &Plane<u8>) -> crate::Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
-        match self {
-            Features::Lfast(d) => d.detect_and_compute(img.view(), None),
-            Features::Orb(d) => d.detect_and_compute(img.view()),
-            Features::Fast { describe, threshold, cap } => {
-                fast9_and_compute(img, *threshold, *cap, describe)
-            }
-        }
-    }
-
-    fn backend_name(&self) -> &'static str {
-        match self {
-            Features::Lfast(d) => d.backend_name(),
-            _ => "cpu",
-        }
-    }
-}
-
 enum Matcher {
     Cpu,
     Gpu { m: Box<GpuMatcher>, fallback: bool },
@@ -294,7 +240,7 @@ fn gpu_context(o: &VoOptions) -> Result<Option<GpuContext>, VoError> {
 fn features(o: &VoOptions, ctx: Option<&GpuContext>) -> Result<Features, VoError> {
     let cfg = o.config.clone();
     Ok(match o.features {
-        FrontEnd::Lfast => Features::Lfast(Box::new(match (ctx, o.backend) {
+        FrontEnd::Lfast => Features::lfast(match (ctx, o.backend) {
             (None, _) => Detector::new(cfg, Backend::Cpu)?,
             (Some(c), Backend::Gpu) => Detector::from_context(c.clone(), cfg)?,
             (Some(c), _) => match Detector::from_context_with_fallback(c.clone(), cfg.clone()) {
@@ -304,21 +250,8 @@ fn features(o: &VoOptions, ctx: Option<&GpuContext>) -> Result<Features, VoError
                     Detector::new(cfg, Backend::Cpu)?
                 }
             },
-        })),
-        FrontEnd::Fast => {
-            Features::Fast { threshold: o.fast_threshold, cap: cfg.n_features, describe: CpuDetector::new(cfg)? }
-        }
-        FrontEnd::Orb => {
-            let n = if cfg.n_features > 0 { cfg.n_features } else { o.orb_features };
-            Features::Orb(OrbDetector::new(OrbParams {
-                n_features: n,
-                n_levels: cfg.n_levels,
-                scale_factor: cfg.scale_factor,
-                fast_threshold: o.fast_threshold,
-                orientation_bins: cfg.orientation_bins,
-                ..OrbParams::default()
-            })?)
-        }
+        }),
+        kind => Features::cpu(kind, cfg, o.fast_threshold, o.orb_features)?,
     })
 }
 
@@ -403,7 +336,7 @@ pub fn run_sequence(seq: &Path, o: &VoOptions) -> Result<VoRun, VoError> {
         let img = crate::image::load_gray(path)?;
         let load_ms = ms(t);
         let t = Instant::now();
-        let (kps, desc) = det.detect(&img)?;
+        let (kps, desc) = det.detect_and_compute(&img)?;
         let detect_ms = ms(t);
         let mut rec = FrameRecord {
             frame: i,

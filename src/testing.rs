@@ -1,10 +1,11 @@
-//! Helpers for the GPU tests: the device (failing, not skipping, when
-//! `REQUIRE_GPU=1` and there is none), uploads of CPU planes into atlas
-//! levels, one pass run on its own, downloads.
+//! Helpers for the GPU == CPU tests (hidden from the docs): the device
+//! (failing, not skipping, when `REQUIRE_GPU=1` and there is none), uploads of
+//! CPU planes into atlas levels, one pass run on its own, downloads. It lives
+//! outside `gpu/` because it feeds the GPU passes with the CPU path's outputs.
 
-use super::buffers::Buffers;
-use super::context::{GpuContext, GpuOptions};
-use super::pass::Pass;
+use crate::gpu::buffers::Buffers;
+use crate::gpu::context::{GpuContext, GpuOptions};
+use crate::gpu::pass::Pass;
 use crate::error::{Error, Result};
 use crate::image::Plane;
 

@@ -1,0 +1,259 @@
+//! The choice of defaults from suites 3-5 (and the VO ATE of suite 6, shown
+//! not scored): the candidates' numbers, the rule ([`choose`]) and its report section.
+
+use super::format::{num, pct, table};
+use super::illumination::IllumSummary;
+use super::kitti::KittiSummary;
+use super::output::read_summary;
+use super::repeatability::RepeatSummary;
+use super::{Result, Suite, Variant, mode_name};
+use crate::config::Config;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The budget the choice of defaults compares at (ORB's default feature count).
+pub const DECISION_BUDGET: u32 = 500;
+/// A challenger must beat the current default's score by more than this to
+/// replace it (differences below it are within what one more scene could flip).
+pub const DECISION_MARGIN: f64 = 0.01;
+
+/// One candidate's numbers in the choice of defaults.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    /// The variant.
+    pub variant: Variant,
+    /// KITTI keypoints per frame.
+    pub kitti_points: f64,
+    /// KITTI detection ms per frame.
+    pub kitti_ms: f64,
+    /// Repeatability, every keypoint.
+    pub rep_all: f64,
+    /// Repeatability at [`DECISION_BUDGET`].
+    pub rep_budget: f64,
+    /// Matching score at [`DECISION_BUDGET`].
+    pub ms_budget: f64,
+    /// Keypoint survival, mean over the four changes.
+    pub survival: f64,
+    /// Visual-odometry ATE RMSE (SE(3)), metres, when suite 6 ran (shown, not scored).
+    pub vo_ate: Option<f64>,
+}
+
+impl Candidate {
+    /// The score: the mean of repeatability and matching score at the budget
+    /// and the illumination survival (all fractions, higher is better).
+    pub fn score(&self) -> f64 {
+        (self.rep_budget + self.ms_budget + self.survival) / 3.0
+    }
+}
+
+/// The choice of defaults made from suites 3-5.
+#[derive(Clone, Debug)]
+pub struct Decision {
+    /// Every candidate, in [`Variant::ALL`] order.
+    pub candidates: Vec<Candidate>,
+    /// The best score.
+    pub best: Variant,
+    /// The current default (`Config::default()`).
+    pub current: Variant,
+    /// What the evaluation recommends (the rule of [`choose`]).
+    pub chosen: Variant,
+    /// Scenes and frames behind the numbers.
+    pub basis: String,
+}
+
+/// Applies the rule of [`Decision`] to candidates; `None` without any.
+///
+/// The current default stays when its score is within [`DECISION_MARGIN`] of
+/// the best. Otherwise the choice is, among the candidates within the margin
+/// of the best, the one with the fewest KITTI keypoints per frame (the
+/// paper's aim: fewer points of the same quality), ties to the higher score.
+pub fn choose(candidates: Vec<Candidate>, basis: String) -> Option<Decision> {
+    let best = candidates.iter().max_by(|a, b| a.score().total_cmp(&b.score()))?;
+    let (best_variant, best_score) = (best.variant, best.score());
+    let d = Config::default();
+    let current = Variant { mode: d.mode, support: d.support };
+    let current_score = candidates.iter().find(|c| c.variant == current).map(Candidate::score);
+    let chosen = match current_score {
+        Some(cur) if best_score - cur <= DECISION_MARGIN => current,
+        _ => candidates
+            .iter()
+            .filter(|c| best_score - c.score() <= DECISION_MARGIN)
+            .min_by(|a, b| a.kitti_points.total_cmp(&b.kitti_points).then(b.score().total_cmp(&a.score())))
+            .map_or(best_variant, |c| c.variant),
+    };
+    Some(Decision { candidates, best: best_variant, current, chosen, basis })
+}
+
+/// The decision from the summaries in `out`; `None` when one of suites 3-5 is missing.
+pub fn decide(out: &Path) -> Result<Option<Decision>> {
+    let (Some(k), Some(r), Some(i)) = (
+        read_summary::<KittiSummary>(out, Suite::Kitti)?,
+        read_summary::<RepeatSummary>(out, Suite::Repeatability)?,
+        read_summary::<IllumSummary>(out, Suite::Illumination)?,
+    ) else {
+        return Ok(None);
+    };
+    let vo = read_summary::<super::vo::VoSummary>(out, Suite::Vo)?;
+    let rep = |key: &str, budget: Option<u32>| r.means.iter().find(|m| m.key == key && m.budget == budget);
+    let mut cands = Vec::new();
+    for v in Variant::ALL {
+        let key = v.key();
+        let km = k.means.iter().find(|m| m.key == key);
+        let surv: Vec<f64> =
+            i.means.iter().filter(|m| m.key == key && m.kind == "keypoints").map(|m| m.survival).collect();
+        let (Some(km), Some(all), Some(b)) = (km, rep(&key, None), rep(&key, Some(DECISION_BUDGET))) else { continue };
+        if surv.is_empty() {
+            continue;
+        }
+        cands.push(Candidate {
+            variant: v,
+            kitti_points: km.keypoints,
+            kitti_ms: km.detect_ms,
+            rep_all: all.repeatability,
+            rep_budget: b.repeatability,
+            ms_budget: b.matching_score,
+            survival: super::mean(surv),
+            vo_ate: vo.as_ref().and_then(|s| s.rows.iter().find(|row| row.key == key)).and_then(|row| row.ate_rmse),
+        });
+    }
+    let basis = format!(
+        "{} KITTI frames; {} homography scene(s) ({}) x {} pairs; {} standard images + {} KITTI frames under 4 brightness changes",
+        k.frames,
+        r.scenes.len(),
+        r.scenes.join(", "),
+        r.pairs,
+        i.standard_images,
+        i.kitti_frames
+    );
+    Ok(choose(cands, basis))
+}
+
+fn variant_label(v: Variant) -> String {
+    format!("{} / support {}", mode_name(v.mode), v.support)
+}
+
+impl Decision {
+    /// The candidates' table.
+    pub fn table(&self) -> String {
+        let rows: Vec<Vec<String>> = self
+            .candidates
+            .iter()
+            .map(|c| {
+                let mut name = variant_label(c.variant);
+                if c.variant == self.current {
+                    name.push_str(" (current default)");
+                }
+                vec![
+                    name,
+                    num(c.kitti_points, 0),
+                    num(c.kitti_ms, 1),
+                    pct(c.rep_all),
+                    pct(c.rep_budget),
+                    pct(c.ms_budget),
+                    pct(c.survival),
+                    num(c.score(), 3),
+                    c.vo_ate.map_or("–".into(), |v| num(v, 3)),
+                ]
+            })
+            .collect();
+        table(
+            &[
+                "L-FAST mode / support",
+                "KITTI points/frame",
+                "KITTI ms/frame",
+                "repeatability (all)",
+                &format!("repeatability @{DECISION_BUDGET}"),
+                &format!("matching score @{DECISION_BUDGET}"),
+                "keypoint survival",
+                "score",
+                "VO ATE RMSE (m, not scored)",
+            ],
+            &rows,
+        )
+    }
+
+    /// One sentence: the recommendation and whether it changes the defaults.
+    pub fn verdict(&self) -> String {
+        let score = |v: Variant| self.candidates.iter().find(|c| c.variant == v).map_or(f64::NAN, Candidate::score);
+        let points = |v: Variant| self.candidates.iter().find(|c| c.variant == v).map_or(f64::NAN, |c| c.kitti_points);
+        let cfg = |v: Variant| format!("`mode = \"{}\"`, `support = {}`", mode_name(v.mode), v.support);
+        let (cur, best, chosen) = (self.current, self.best, self.chosen);
+        if chosen == cur && best == cur {
+            format!("Keep the current defaults {}: they score best ({}).", cfg(cur), num(score(cur), 3))
+        } else if chosen == cur {
+            format!(
+                "Keep the current defaults {} ({}): the best candidate, {} ({}), is ahead by {} only, within the \
+                 margin of {DECISION_MARGIN}.",
+                cfg(cur),
+                num(score(cur), 3),
+                variant_label(best),
+                num(score(best), 3),
+                num(score(best) - score(cur), 3)
+            )
+        } else if chosen == best {
+            format!(
+                "Change the defaults to {} (score {}) from {} (score {}): a lead of {}, more than the margin of \
+                 {DECISION_MARGIN}.",
+                cfg(chosen),
+                num(score(chosen), 3),
+                cfg(cur),
+                num(score(cur), 3),
+                num(score(chosen) - score(cur), 3)
+            )
+        } else {
+            format!(
+                "Change the defaults to {} (score {}) from {} (score {}): {} scores best ({}), but {} is within the \
+                 margin of {DECISION_MARGIN} of it with fewer keypoints ({} instead of {} per KITTI frame), and \
+                 both lead the current default by more than the margin.",
+                cfg(chosen),
+                num(score(chosen), 3),
+                cfg(cur),
+                num(score(cur), 3),
+                variant_label(best),
+                num(score(best), 3),
+                variant_label(chosen),
+                num(points(chosen), 0),
+                num(points(best), 0)
+            )
+        }
+    }
+
+    /// The report section.
+    pub fn markdown(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "## Choice of defaults (from suites 3-5)\n");
+        let _ = writeln!(
+            s,
+            "Candidates: L-FAST `mode` in {{paper, branch}} x `support` in {{3, 4}}, everything else as \
+             `Config::default()`. Score = mean of repeatability and matching score at a budget of \
+             {DECISION_BUDGET} keypoints (suite 4, every pair of every scene) and keypoint survival (suite \
+             5, every image, the four changes). The current default stays when its score is within \
+             {DECISION_MARGIN} of the best; otherwise the choice is the candidate with the fewest KITTI \
+             keypoints per frame (suite 3; the paper's aim: fewer points of the same quality) among those \
+             within {DECISION_MARGIN} of the best. The visual-odometry ATE (suite 6, when it ran) is shown, \
+             not scored: one trajectory per candidate. Basis: {}.\n",
+            self.basis
+        );
+        s.push_str(&self.table());
+        let cost = |v: Variant| {
+            self.candidates
+                .iter()
+                .find(|c| c.variant == v)
+                .map_or((f64::NAN, f64::NAN), |c| (c.kitti_points, c.kitti_ms))
+        };
+        if self.chosen != self.current {
+            let ((pc, mc), (pn, mn)) = (cost(self.chosen), cost(self.current));
+            let _ = writeln!(
+                s,
+                "\nCost of the change on KITTI: {} instead of {} keypoints per frame, {} instead of {} ms per frame \
+                 (detection).",
+                num(pc, 0),
+                num(pn, 0),
+                num(mc, 1),
+                num(mn, 1)
+            );
+        }
+        let _ = writeln!(s, "\n**{}**\n", self.verdict());
+        s
+    }
+}

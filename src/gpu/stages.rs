@@ -1,0 +1,135 @@
+//! The one declaration of the GPU pipeline: every stage, in the order it is
+//! recorded, with its pass type. The stage list [`STAGES`] (compute-pass and
+//! timestamp labels), every shader [`SHADERS`](super::SHADERS), the pipelines
+//! ([`Passes`]), their bind groups ([`Bound`]) and the encode order
+//! ([`Passes::record_all`]) all follow from it, so adding a pass is one edit
+//! here (plus its `shaders/<stage>.wgsl`, `src/gpu/<stage>.rs`, `src/cpu/<stage>.rs`).
+
+use super::ShaderInfo;
+use super::buffers::Buffers;
+use super::pass::Pass;
+use crate::error::Result;
+
+/// Declares the stages (`module: PassType`, in recording order) and the
+/// shaders that are not a stage of the detector (`standalone: module`).
+macro_rules! stages {
+    ($($m:ident : $ty:ident),* $(,)? ; standalone: $($x:ident),* $(,)?) => {
+        /// The stages in the order they are recorded (one compute pass each;
+        /// the passes' labels and the profile's timestamp pairs).
+        pub const STAGES: [&str; [$(stringify!($m)),*].len()] = [$(stringify!($m)),*];
+
+        /// Every shader: the stages in pipeline order, then the standalone ones.
+        pub const SHADERS: &[ShaderInfo] = &[
+            $(ShaderInfo { name: stringify!($m), source: super::$m::SOURCE, bindings: super::$m::BINDINGS },)*
+            $(ShaderInfo { name: stringify!($x), source: super::$x::SOURCE, bindings: super::$x::BINDINGS },)*
+        ];
+
+        /// Every stage's pipelines, built once per device.
+        #[derive(Debug)]
+        pub(crate) struct Passes {
+            $(pub(crate) $m: super::$m::$ty,)*
+        }
+
+        /// The bind groups of every stage for one [`Buffers`].
+        pub(crate) struct Bound {
+            $(pub(crate) $m: <super::$m::$ty as Pass>::Bound,)*
+        }
+
+        impl Passes {
+            /// Compiles every stage's pipelines.
+            pub(crate) fn new(device: &wgpu::Device) -> Self {
+                Self { $($m: Pass::new(device),)* }
+            }
+
+            /// Binds every stage to `b`.
+            pub(crate) fn bind(&self, d: &wgpu::Device, b: &Buffers) -> Result<Bound> {
+                Ok(Bound { $($m: self.$m.bind(d, b)?,)* })
+            }
+
+            /// Records every stage in order, each in its own compute pass after
+            /// its `prepare` commands. `special(stage, pass)` may record a stage
+            /// itself (returning true), as the texture input does for `luma`.
+            pub(crate) fn record_all(
+                &self,
+                enc: &mut wgpu::CommandEncoder,
+                b: &Buffers,
+                bound: &Bound,
+                ts: Option<&Timestamps>,
+                mut special: impl FnMut(&'static str, &mut wgpu::ComputePass<'_>) -> bool,
+            ) {
+                let mut stage = 0;
+                $(
+                    self.$m.prepare(enc, b);
+                    {
+                        let mut cp = begin_pass(enc, ts, stage);
+                        if !special(stringify!($m), &mut cp) {
+                            self.$m.record(&mut cp, &bound.$m, b);
+                        }
+                    }
+                    stage += 1;
+                )*
+                debug_assert_eq!(stage, STAGES.len());
+            }
+        }
+    };
+}
+
+stages! {
+    luma: LumaPass,
+    pyramid: PyramidPass,
+    median: MedianPass,
+    gradient: GradientPass,
+    nms: NmsPass,
+    histogram: HistogramPass,
+    otsu: OtsuPass,
+    local_threshold: LocalThresholdPass,
+    classify: ClassifyPass,
+    rules: RulesPass,
+    hysteresis: HysteresisPass,
+    lfast: LfastPass,
+    response: ResponsePass,
+    corner_nms: CornerNmsPass,
+    select: SelectPass,
+    blur: BlurPass,
+    orientation: OrientationPass,
+    orb: OrbPass;
+    standalone: matcher,
+}
+
+/// Per-stage GPU timestamps (when the adapter has `TIMESTAMP_QUERY`): a
+/// begin and an end query per stage.
+pub(crate) struct Timestamps {
+    pub(crate) set: wgpu::QuerySet,
+    pub(crate) resolve: wgpu::Buffer,
+}
+
+impl Timestamps {
+    /// Queries written per frame.
+    pub(crate) const QUERIES: u32 = 2 * STAGES.len() as u32;
+
+    pub(crate) fn new(d: &wgpu::Device) -> Self {
+        Self {
+            set: d.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("lfast timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: Self::QUERIES,
+            }),
+            resolve: d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("lfast timestamps"),
+                size: Self::QUERIES as u64 * 8,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+        }
+    }
+}
+
+/// Opens the compute pass of stage `stage`, labelled with its name and timed when profiling.
+fn begin_pass<'e>(enc: &'e mut wgpu::CommandEncoder, ts: Option<&Timestamps>, stage: usize) -> wgpu::ComputePass<'e> {
+    let timestamp_writes = ts.map(|t| wgpu::ComputePassTimestampWrites {
+        query_set: &t.set,
+        beginning_of_pass_write_index: Some(2 * stage as u32),
+        end_of_pass_write_index: Some(2 * stage as u32 + 1),
+    });
+    enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(STAGES[stage]), timestamp_writes })
+}

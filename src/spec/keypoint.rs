@@ -1,0 +1,80 @@
+//! Keypoint position <-> level pixel (SPEC 10, 11), one definition of each
+//! direction:
+//!
+//! - [`keypoint_at`]: the keypoint of a corner at level pixel (x, y) of level
+//!   `l` (scale `s = scale_factor^l`): `pt = ((x + centre) s, (y + centre) s)`,
+//!   `size = 31 s`, computed in f64 and rounded to f32 once. `centre` is where a
+//!   pixel's position lies within it: [`LFAST_CENTRE`] (0.5) for L-FAST corners,
+//!   which sit on the gradient grid, [`OPENCV_CENTRE`] (0) for FAST/ORB as
+//!   OpenCV reports them. The CPU path, the GPU readback and the baselines all
+//!   build their keypoints here.
+//! - [`level_pixel`]: the level pixel a keypoint position names,
+//!   `floor(pt / s + 0.25)`: the intended pixel under both conventions (it
+//!   tolerates a quarter pixel of rounding either way), used to describe
+//!   caller-supplied keypoints and by the tests that map keypoints back.
+
+use crate::config::Config;
+use crate::keypoint::KeyPoint;
+
+/// Position of an L-FAST corner within its pixel.
+pub const LFAST_CENTRE: f64 = 0.5;
+/// Position of a FAST/ORB corner within its pixel (OpenCV's convention).
+pub const OPENCV_CENTRE: f64 = 0.0;
+
+/// The keypoint of level pixel (x, y) of level `level`, of scale `s`.
+///
+/// ```
+/// let k = lfast::spec::keypoint_at(1, 10, 4, 1.2, lfast::spec::LFAST_CENTRE, 90.0, 3.0);
+/// assert_eq!((k.pt.x, k.pt.y, k.size, k.octave), (12.6, 5.4, 37.2, 1));
+/// ```
+pub fn keypoint_at(level: u32, x: u32, y: u32, s: f64, centre: f64, angle: f32, response: f32) -> KeyPoint {
+    KeyPoint {
+        pt: glam::Vec2::new(((x as f64 + centre) * s) as f32, ((y as f64 + centre) * s) as f32),
+        size: (31.0 * s) as f32,
+        angle,
+        response,
+        octave: level as i32,
+        class_id: -1,
+    }
+}
+
+/// The level pixel coordinate that position `p` names at scale `s`:
+/// `floor(p / s + 0.25)` (may be negative or past the level; the caller checks).
+///
+/// ```
+/// use lfast::spec::{LFAST_CENTRE, OPENCV_CENTRE, keypoint_at, level_pixel};
+/// let s = 1.2f64.powi(3);
+/// for centre in [LFAST_CENTRE, OPENCV_CENTRE] {
+///     let k = keypoint_at(3, 17, 9, s, centre, 0.0, 0.0);
+///     assert_eq!((level_pixel(k.pt.x, s), level_pixel(k.pt.y, s)), (17.0, 9.0));
+/// }
+/// ```
+pub fn level_pixel(p: f32, s: f64) -> f64 {
+    (p as f64 / s + 0.25).floor()
+}
+
+/// The level pixel (x, y) of a keypoint under `cfg`'s scale (by [`level_pixel`]),
+/// for keypoints inside their level.
+pub fn keypoint_level_pixel(cfg: &Config, k: &KeyPoint) -> (u32, u32) {
+    let s = cfg.level_scale(k.octave.max(0) as u32);
+    (level_pixel(k.pt.x, s).max(0.0) as u32, level_pixel(k.pt.y, s).max(0.0) as u32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_on_every_pixel_of_a_pyramid() {
+        let cfg = Config::default();
+        for (l, &(w, h)) in cfg.level_sizes(1241, 376).iter().enumerate() {
+            let s = cfg.level_scale(l as u32);
+            for centre in [LFAST_CENTRE, OPENCV_CENTRE] {
+                for x in 0..w {
+                    let k = keypoint_at(l as u32, x, h - 1, s, centre, 0.0, 0.0);
+                    assert_eq!(keypoint_level_pixel(&cfg, &k), (x, h - 1), "level {l} x {x} centre {centre}");
+                }
+            }
+        }
+    }
+}
