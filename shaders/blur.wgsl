@@ -3,6 +3,7 @@
 // (`gaussian_blur_into`, `blur_any`): a horizontal pass to Q8 sums in
 // `blur_tmp` (< 2^16, as the CPU's u16), then a vertical pass to Q16, rounded.
 // All levels per dispatch (z = level).
+// Tests: tests/gpu_levels.rs (this pass alone == src/cpu/blur.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> gray: array<u32>;
 @group(0) @binding(2) var<storage, read_write> blur_tmp: array<u32>;

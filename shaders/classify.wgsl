@@ -3,6 +3,7 @@
 // m, nms, otsu, windows, grid -> classes (NONE 0, WEAK_WEAK 1, WEAK 2,
 // WEAK_STRONG 3, STRONG 4). One invocation per pixel, all levels in one
 // dispatch (z = level).
+// Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/classify.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> m: array<u32>;
 @group(0) @binding(2) var<storage, read> nms: array<u32>;

@@ -3,6 +3,7 @@
 // (GpuKeypoint, src/gpu/buffers.rs) with counters[CORNERS] as the cursor.
 // One invocation per pixel, all levels in one dispatch (over the tile list). The
 // append order is nondeterministic; select.wgsl puts the list in SPEC 9 order.
+// Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/corner_nms.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> cand: array<u32>;
 @group(0) @binding(2) var<storage, read> resp: array<u32>;

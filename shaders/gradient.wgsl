@@ -1,6 +1,7 @@
 // SPEC 2: LSD 2x2 gradient (paper Eq. 2) in integers. Mirrors src/cpu/gradient.rs.
 // denoised -> gx (gx2 as i32), gy (gy2 as i32), s (S = gx2^2 + gy2^2), m (M = isqrt(S) >> 1).
 // One invocation per pixel, all levels in one dispatch (over the tile list).
+// Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/gradient.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> denoised: array<u32>;
 @group(0) @binding(2) var<storage, read_write> gx: array<i32>;

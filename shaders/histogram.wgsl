@@ -5,6 +5,7 @@
 // Each workgroup counts its 16x16 tile into workgroup-private bins, then adds
 // each non-empty bin to the global histogram once (integer adds commute, so
 // the result does not depend on the order).
+// Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/histogram.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> m: array<u32>;
 @group(0) @binding(2) var<storage, read_write> hist: array<atomic<u32>>;

@@ -41,6 +41,7 @@
 //   the atomicMin result decides.
 // - Levels never connect: neighbours are taken only inside the level's bounds,
 //   and each level owns its own range of atlas indices.
+// Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/hysteresis.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> ruled: array<u32>;
 @group(0) @binding(2) var<storage, read_write> labels: array<atomic<u32>>;

@@ -2,6 +2,7 @@
 // Mirrors src/cpu/lfast.rs. `edges` (+ `mask` when P.use_mask == 1) ->
 // `cand` (1 = candidate, 0 otherwise; every pixel of every level is written).
 // One invocation per pixel, all levels in one dispatch (over the tile list).
+// Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/lfast.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> edges: array<u32>;
 @group(0) @binding(2) var<storage, read> mask: array<u32>;

@@ -5,6 +5,7 @@
 // 2: lower median, 3: V3}] over M8 = min(M, 255).
 // One workgroup per window: workgroup_id = (i, j, level); dispatch
 // (max nx, max ny, n_levels), groups beyond a level's grid return at once.
+// Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/local_threshold.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> m: array<u32>;
 @group(0) @binding(2) var<storage, read> grid: array<u32>;

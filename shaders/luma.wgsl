@@ -7,6 +7,7 @@
 //   value is the byte v / 255, so round(v * 255) recovers the byte exactly;
 //   then OpenCV's integer BT.601 (alpha ignored). `tex_kind.x` = 1 marks a
 //   one-channel texture: its red channel is the gray value itself.
+// Tests: tests/gpu_levels.rs (this pass alone == src/cpu/luma.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> input: array<u32>;
 @group(0) @binding(2) var<storage, read_write> gray: array<u32>;

@@ -8,6 +8,7 @@
 // in tiles of TILE descriptors staged in workgroup memory, each invocation of
 // the workgroup loading one descriptor of the tile. `P` (the common prelude's
 // uniform) is declared but unused here.
+// Tests: tests/gpu_matcher.rs (this pass alone == src/cpu/matcher.rs); tests/gpu_shaders.rs (naga, bindings).
 
 struct MatchParams {
     n_query: u32,

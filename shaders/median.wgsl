@@ -1,5 +1,6 @@
 // SPEC 1: noise-flagged 3x3 median. Mirrors src/cpu/median.rs.
 // One invocation per pixel, all levels in one dispatch (over the tile list).
+// Tests: tests/gpu_median.rs (this pass alone == src/cpu/median.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> src: array<u32>;
 @group(0) @binding(2) var<storage, read_write> dst: array<u32>;

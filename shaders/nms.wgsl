@@ -2,6 +2,7 @@
 // direction sector found by integer tests. Mirrors src/cpu/nms.rs.
 // gx, gy, s -> nms (1 = survivor, 0 otherwise). One invocation per pixel,
 // all levels in one dispatch (over the tile list).
+// Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/nms.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> gx: array<i32>;
 @group(0) @binding(2) var<storage, read> gy: array<i32>;

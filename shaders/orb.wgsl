@@ -4,6 +4,7 @@
 // Descriptor i is descriptors[8i .. 8i+8]: bit b of word k is pair 32k + b,
 // so (little-endian) bit i of byte j is pair 8j + i and the buffer's bytes
 // are the [u8; 32] descriptors.
+// Tests: tests/gpu_levels.rs (this pass alone == src/cpu/orb.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 const KEYPOINTS: u32 = 1u; // counter::KEYPOINTS
 const PI: f32 = 3.14159265358979323846;

@@ -4,6 +4,7 @@
 // counters[KEYPOINTS] (64 per workgroup). The moments are exact integers on
 // the *unsmoothed* level; the angle is an f32 approximation (the host
 // recomputes it exactly from m10, m01).
+// Tests: tests/gpu_levels.rs (this pass alone == src/cpu/orientation.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 const KEYPOINTS: u32 = 1u; // counter::KEYPOINTS
 const HALF_PATCH: i32 = 15;

@@ -9,6 +9,7 @@
 // sum = Σ i*h[i] < 2^36, d = |n*s0 - n0*sum| < 2^62, num = d^2 < 2^124,
 // den = n0*n1 < 2^56, and the cross products num*bden < 2^180: every value
 // fits the 192-bit `Wide` below, so all arithmetic here is exact.
+// Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/otsu.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> hist: array<u32>;
 @group(0) @binding(2) var<storage, read_write> otsu: array<u32>;

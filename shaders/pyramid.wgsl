@@ -2,6 +2,7 @@
 // bilinear weights in Q11 (OpenCV INTER_LINEAR). Mirrors src/cpu/pyramid.rs
 // (`tap`, `resize_naive`). One dispatch per level: `level_index.x` = l,
 // given by the dynamic offset of `level_index` (record l at l * 256 bytes).
+// Tests: tests/gpu_levels.rs (this pass alone == src/cpu/pyramid.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 const COEF_BITS: u32 = 11u;
 const ONE: u32 = 2048u; // 1 << COEF_BITS

@@ -8,6 +8,7 @@
 // every i32 -> f32 conversion rounded explicitly (to_f32) and every
 // intermediate passed through `opaque`, so that no compiler can contract
 // a*b + c into an fma or reassociate (Rust does neither).
+// Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/response.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> cand: array<u32>;
 @group(0) @binding(2) var<storage, read> denoised: array<u32>;

@@ -2,6 +2,7 @@
 // Mirrors src/cpu/rules.rs. `classes` (SPEC 6) -> `ruled`, one invocation per
 // pixel, all levels in one dispatch (over the tile list). Both rules read the classes
 // of SPEC 6 only, so the result does not depend on the order of invocations.
+// Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/rules.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> classes: array<u32>;
 @group(0) @binding(2) var<storage, read_write> ruled: array<u32>;

@@ -16,6 +16,7 @@
 // - finish (1 invocation): the final count, indirect args and draw args.
 // Both rank loops are O(n^2) over the corner list, tiled through workgroup
 // memory. Positions are unique, so the order is total and the output deterministic.
+// Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/select.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> corners: array<Kp>;
 @group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;

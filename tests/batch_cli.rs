@@ -3,53 +3,12 @@
 
 mod common;
 
-use lfast::io::Features;
 use std::ffi::OsStr;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 
-use common::{lfast, stderr, stdout};
-
-fn show(o: &Output) -> String {
-    format!("exit {:?}\nstdout: {}\nstderr: {}", o.status, stdout(o), stderr(o))
-}
-
-/// The summary line's (done, skipped, failed).
-fn summary(o: &Output) -> (u64, u64, u64) {
-    let text = stdout(o);
-    let line = text.lines().rfind(|l| l.starts_with("summary: ")).unwrap_or_else(|| panic!("no summary\n{}", show(o)));
-    let num = |key: &str| -> u64 {
-        let rest = &line[line.find(key).unwrap_or_else(|| panic!("no `{key}` in {line:?}")) + key.len()..];
-        rest.trim_start().split(|c: char| !c.is_ascii_digit()).next().unwrap().parse().unwrap()
-    };
-    (num("done"), num("skipped"), num("failed"))
-}
-
-fn read_features(p: &Path) -> Features {
-    let text = std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
-
-/// Every file under `dir`, relative, sorted.
-fn files(dir: &Path) -> Vec<String> {
-    fn walk(root: &Path, d: &Path, out: &mut Vec<String>) {
-        for e in std::fs::read_dir(d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(root, &p, out);
-            } else {
-                out.push(p.strip_prefix(root).unwrap().to_string_lossy().replace('\\', "/"));
-            }
-        }
-    }
-    let mut v = Vec::new();
-    if dir.exists() {
-        walk(dir, dir, &mut v);
-    }
-    v.sort();
-    v
-}
+use common::{files, lfast, read_features, show, stderr, stdout, summary};
 
 /// in/: coins.png, text.png, sub/camera.png (good), trunc.png (a truncated
 /// PNG), x.png (a text file).

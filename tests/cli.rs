@@ -2,11 +2,9 @@
 
 mod common;
 
-use lfast::io::Features;
-use std::path::Path;
 use std::process::Output;
 
-use common::{lfast, stderr, stdout};
+use common::{lfast, read_features, stderr, stdout};
 
 fn assert_ok(o: &Output) {
     assert!(o.status.success(), "exit {:?}\nstdout: {}\nstderr: {}", o.status, stdout(o), stderr(o));
@@ -19,11 +17,6 @@ fn assert_fails_naming(o: &Output, needle: &str) {
     let err = stderr(o);
     assert_eq!(err.trim_end().lines().count(), 1, "stderr should be one line: {err:?}");
     assert!(err.contains(needle), "stderr does not name `{needle}`: {err:?}");
-}
-
-fn read_features(p: &Path) -> Features {
-    let text = std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
 #[test]

@@ -5,6 +5,7 @@
 
 mod common;
 
+use common::crop;
 use lfast::Plane;
 use lfast::eval::metrics::{
     Connectivity, EdgeStats, Lighting, components, edge_survival, keypoint_survival, mse, psnr, read_homography,
@@ -359,11 +360,6 @@ fn choice_of_defaults_rule() {
 }
 
 // ---------------------------------------------------------- the CLI, end to end
-
-fn crop(img: &Plane<u8>, x0: u32, y0: u32, w: u32, h: u32) -> Plane<u8> {
-    let data = (y0..y0 + h).flat_map(|y| (x0..x0 + w).map(move |x| (x, y))).map(|(x, y)| img.at(x, y)).collect();
-    Plane::from_vec(w, h, data).unwrap()
-}
 
 /// A tiny data root: standard/ (two CC0 crops), kitti/ (two frames, calib, poses),
 /// homography/shift/ (img2 = img1 moved, img3 = img1; H1to2p, H1to3p).

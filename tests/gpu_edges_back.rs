@@ -1,5 +1,9 @@
 //! GPU rules, hysteresis and L-FAST (SPEC 7-8) against the CPU reference,
 //! bit for bit: each GPU stage alone, fed the CPU output of the stage before.
+
+mod common;
+
+use common::crop;
 use lfast::cpu::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use lfast::cpu::lfast::{LfastParams, lfast as cpu_lfast};
 use lfast::cpu::{edge_map, hysteresis::hysteresis, rules::rules};
@@ -43,16 +47,6 @@ fn poison(ctx: &GpuContext, b: &Buffers, buf: &wgpu::Buffer, v: u32) {
 
 fn to_u32(p: &Plane<u8>) -> Vec<u32> {
     p.data.iter().map(|&v| v as u32).collect()
-}
-
-/// A `w x h` crop of `img` at (x0, y0), clipped to the image.
-fn crop(img: &Plane<u8>, x0: u32, y0: u32, w: u32, h: u32) -> Plane<u8> {
-    let (w, h) = (w.min(img.width - x0), h.min(img.height - y0));
-    let data = (y0..y0 + h)
-        .flat_map(|y| (x0..x0 + w).map(move |x| (x, y)))
-        .map(|(x, y)| img.at(x, y))
-        .collect();
-    plane(w, h, data)
 }
 
 /// Crops of at most ~200x150 of every test image (lavapipe is slow).

@@ -2,6 +2,10 @@
 //! against the CPU reference, bit for bit: each stage alone on the CPU output
 //! of the stage before it, on sizes that cross the 16-pixel tiles and on
 //! several pyramid levels, then all six chained on the GPU from `denoised`.
+
+mod common;
+
+use common::crop;
 use lfast::cpu::classify::{NONE, STRONG};
 use lfast::cpu::{self, EdgeMap};
 use lfast::gpu::classify::ClassifyPass;
@@ -710,19 +714,6 @@ fn run_front(ctx: &GpuContext, b: &Buffers) {
         "validation error"
     );
     ctx.wait().unwrap();
-}
-
-/// A `w x h` crop of `img` at `(x0, y0)`.
-fn crop(img: &Plane<u8>, x0: u32, y0: u32, w: u32, h: u32) -> Plane<u8> {
-    Plane::from_vec(
-        w,
-        h,
-        (0..h)
-            .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .map(|(x, y)| img.at(x0 + x, y0 + y))
-            .collect(),
-    )
-    .unwrap()
 }
 
 /// The six passes chained on the GPU from an uploaded `denoised`, on a

@@ -552,7 +552,8 @@ fn orientation_of_literal_directions() {
         ..Config::default()
     };
     let b = Buffers::new(&ctx.device, &cfg, 64, 64).unwrap();
-    let cases: [(fn(u32, u32) -> u8, u32, f32); 5] = [
+    type Pattern = fn(u32, u32) -> u8;
+    let cases: [(Pattern, u32, f32); 5] = [
         (|x, _| (x * 3) as u8, 0, 0.0),
         (|_, y| (y * 3) as u8, 8, 90.0), // on the 7|8 boundary: the upper bin
         (|x, _| (255 - x * 3) as u8, 15, 180.0),

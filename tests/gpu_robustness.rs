@@ -8,6 +8,7 @@
 
 mod common;
 
+use common::plane_fn as plane;
 use lfast::config::{Config, Mode};
 use lfast::cpu::CpuDetector;
 use lfast::gpu::detector::{Frame, GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
@@ -95,17 +96,6 @@ fn identical(what: &str, a: &Frame, b: &Frame) -> Result<(), String> {
     Ok(())
 }
 
-/// A plane from a closure of (x, y).
-fn plane(w: u32, h: u32, f: impl Fn(u32, u32) -> u8) -> Plane<u8> {
-    let mut p = Plane::<u8>::new(w, h);
-    for y in 0..h {
-        for x in 0..w {
-            p.data[(y * w + x) as usize] = f(x, y);
-        }
-    }
-    p
-}
-
 fn xorshift(seed: u32) -> impl FnMut() -> u32 {
     let mut s = seed.wrapping_mul(0x9E37_79B9) | 1;
     move || {
@@ -159,7 +149,7 @@ fn render(c: &Content, w: u32, h: u32) -> Plane<u8> {
                 .map(|_| {
                     let (x, y) = (r() % w, r() % h);
                     let (rw, rh) = (4 + r() % (w / 5 + 4), 4 + r() % (h / 5 + 4));
-                    (x, y, rw, rh, if r() % 2 == 0 { 0 } else { 255 })
+                    (x, y, rw, rh, if r().is_multiple_of(2) { 0 } else { 255 })
                 })
                 .collect();
             plane(w, h, |x, y| {
@@ -1395,7 +1385,8 @@ fn bad_gpu_inputs_are_typed_errors() {
     };
     use wgpu::TextureFormat as F;
     let bind = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
-    let cases: Vec<(&str, wgpu::TextureView, F, fn(&Error) -> bool)> = vec![
+    type Case = (&'static str, wgpu::TextureView, F, fn(&Error) -> bool);
+    let cases: Vec<Case> = vec![
         (
             "wrong size",
             tex(w + 1, h, F::Rgba8Unorm, bind),

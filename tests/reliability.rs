@@ -9,6 +9,8 @@
 //! and fail instead of skipping with `REQUIRE_GPU=1`, as in CI.
 
 mod common;
+
+use common::plane_fn as plane;
 #[path = "../fuzz/src/lib.rs"]
 mod fuzz_cases;
 
@@ -20,15 +22,6 @@ use lfast::{Backend, Config, Detector, Error, GrayView, KeyPoint, Mode, Plane};
 use std::path::{Path, PathBuf};
 
 // ---------------------------------------------------------------- helpers
-
-/// A plane from a closure of (x, y), called in row-major order.
-fn plane(w: u32, h: u32, mut f: impl FnMut(u32, u32) -> u8) -> Plane<u8> {
-    Plane {
-        width: w,
-        height: h,
-        data: (0..w * h).map(|i| f(i % w, i / w)).collect(),
-    }
-}
 
 /// xorshift32 noise, every value 0..=255.
 fn noise(w: u32, h: u32, seed: u32) -> Plane<u8> {
@@ -43,7 +36,7 @@ fn noise(w: u32, h: u32, seed: u32) -> Plane<u8> {
 
 fn checker(w: u32, h: u32, cell: u32) -> Plane<u8> {
     plane(w, h, |x, y| {
-        if (x / cell + y / cell) % 2 == 0 {
+        if (x / cell + y / cell).is_multiple_of(2) {
             0
         } else {
             255
@@ -381,7 +374,7 @@ fn checkerboard_edges_lie_on_the_cell_boundaries_and_corners_on_the_junctions() 
     let c = cpu(&one_level(Mode::Paper));
     let e = c.edge_image(img.view()).unwrap();
     // the gradient of pixel x lies between x and x+1: a step at 16k sits at x = 16k - 1
-    let on_boundary = |v: u32| (v + 1) % cell == 0;
+    let on_boundary = |v: u32| (v + 1).is_multiple_of(cell);
     let mut n = 0;
     for y in 0..128 {
         for x in 0..128 {

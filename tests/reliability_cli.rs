@@ -7,80 +7,11 @@
 
 mod common;
 
-use common::{lfast, stderr, stdout};
-use lfast::io::Features;
+use common::{command, files, lfast, read_features, show, stderr, stdout, summary};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn show(o: &Output) -> String {
-    format!(
-        "exit {:?}\nstdout: {}\nstderr: {}",
-        o.status,
-        stdout(o),
-        stderr(o)
-    )
-}
-
-/// The summary line's (done, skipped, failed).
-fn summary(o: &Output) -> (u64, u64, u64) {
-    let text = stdout(o);
-    let line = text
-        .lines()
-        .rfind(|l| l.starts_with("summary: "))
-        .unwrap_or_else(|| panic!("no summary\n{}", show(o)));
-    let num = |key: &str| -> u64 {
-        let rest = &line[line.find(key).unwrap() + key.len()..];
-        rest.trim_start()
-            .split(|c: char| !c.is_ascii_digit())
-            .next()
-            .unwrap()
-            .parse()
-            .unwrap()
-    };
-    (num("done"), num("skipped"), num("failed"))
-}
-
-/// The binary with `args` and extra environment variables, not yet started.
-fn command(args: &[&dyn AsRef<OsStr>], env: &[(&str, &str)]) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_lfast"));
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        c.env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    }
-    for a in args {
-        c.arg(a);
-    }
-    for (k, v) in env {
-        c.env(k, v);
-    }
-    c
-}
-
-/// Every file under `dir`, relative, sorted (hidden ones included).
-fn files(dir: &Path) -> Vec<String> {
-    fn walk(root: &Path, d: &Path, out: &mut Vec<String>) {
-        for e in std::fs::read_dir(d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(root, &p, out);
-            } else {
-                out.push(p.strip_prefix(root).unwrap().to_string_lossy().into_owned());
-            }
-        }
-    }
-    let mut v = Vec::new();
-    if dir.exists() {
-        walk(dir, dir, &mut v);
-    }
-    v.sort();
-    v
-}
-
-fn read_features(p: &Path) -> Features {
-    let text = std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
 
 /// A decoder seed kept for the fuzzer: the file without its first byte (which
 /// only picks the fuzzer's file name extension).
@@ -198,6 +129,7 @@ fn one_batch_with_every_format_and_every_broken_input() {
 
 /// Runs `cmd` and returns its output and peak resident memory in KiB.
 #[cfg(unix)]
+#[allow(clippy::zombie_processes)] // reaped by libc::wait4 below, which also reports the peak memory
 fn run_measuring_memory(mut cmd: Command) -> (std::process::ExitStatus, String, i64) {
     use std::io::Read;
     use std::os::unix::process::ExitStatusExt;
@@ -300,7 +232,7 @@ fn a_frame_over_the_gpu_limits_runs_on_the_cpu_with_a_warning() {
         ..Default::default()
     };
     let lim = ctx.device.limits();
-    let limit = (lim.max_storage_buffer_binding_size as u64).min(lim.max_buffer_size);
+    let limit = lim.max_storage_buffer_binding_size.min(lim.max_buffer_size);
     let over = |s: u32| {
         let l = lfast::gpu::FrameLayout::new(&cfg, s, s);
         l.capacity as u64 * 48 > limit || l.total_px as u64 * 4 > limit
@@ -450,7 +382,8 @@ fn outputs_are_byte_identical_across_jobs_threads_and_backends() {
         std::fs::copy(common::data(name), dir.join(name)).unwrap();
     }
     let gpu = lfast::testing::context().is_some();
-    let runs: Vec<(&str, Vec<&str>, Vec<(&str, &str)>)> = vec![
+    type Run<'a> = (&'a str, Vec<&'a str>, Vec<(&'a str, &'a str)>);
+    let runs: Vec<Run> = vec![
         ("jobs1", vec!["--backend", "cpu", "--jobs", "1"], vec![]),
         ("jobs2", vec!["--backend", "cpu", "--jobs", "2"], vec![]),
         (
@@ -472,7 +405,8 @@ fn outputs_are_byte_identical_across_jobs_threads_and_backends() {
         ("gpu", vec!["--backend", "gpu"], vec![]),
         ("gpu-jobs1", vec!["--backend", "gpu", "--jobs", "1"], vec![]),
     ];
-    let mut reference: Option<(String, Vec<(String, Vec<u8>)>)> = None;
+    type Outputs = (String, Vec<(String, Vec<u8>)>);
+    let mut reference: Option<Outputs> = None;
     for (name, flags, env) in runs {
         if name.starts_with("gpu") && !gpu {
             continue;
@@ -759,7 +693,7 @@ fn sigint_stops_lfast_edges_between_files() {
     let left = files(&out);
     assert_eq!(temporaries(&out), Vec::<String>::new());
     assert!(
-        !left.is_empty() && left.len() < 30 * 5 && left.len() % 5 == 0,
+        !left.is_empty() && left.len() < 30 * 5 && left.len().is_multiple_of(5),
         "{left:?}"
     );
     for f in &left {

@@ -89,7 +89,7 @@ pub fn image(r: &mut Bytes, w: u32, h: u32) -> Plane<u8> {
         1 => vec![a; n],
         2 => (0..n)
             .map(|i| {
-                if ((i as u32 % w.max(1)) / p1 + (i as u32 / w.max(1)) / p1) % 2 == 0 {
+                if ((i as u32 % w.max(1)) / p1 + (i as u32 / w.max(1)) / p1).is_multiple_of(2) {
                     a
                 } else {
                     b
@@ -100,7 +100,7 @@ pub fn image(r: &mut Bytes, w: u32, h: u32) -> Plane<u8> {
             .map(|i| {
                 let (x, y) = (i as u32 % w.max(1), i as u32 / w.max(1));
                 let t = if seed & 1 == 0 { x } else { y };
-                if (t / p1) % 2 == 0 { a } else { b }
+                if (t / p1).is_multiple_of(2) { a } else { b }
             })
             .collect(),
         4 => (0..n).map(|_| next() as u8).collect(),

@@ -21,7 +21,7 @@ pub(super) fn run(adapter: Option<String>) -> Result<bool, CliError> {
             println!(
                 "  limits: max buffer {} MiB, storage binding {} MiB, workgroups per dimension {}, invocations per workgroup {}",
                 l.max_buffer_size >> 20,
-                (l.max_storage_buffer_binding_size as u64) >> 20,
+                l.max_storage_buffer_binding_size >> 20,
                 l.max_compute_workgroups_per_dimension,
                 l.max_compute_invocations_per_workgroup
             );

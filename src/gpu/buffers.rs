@@ -214,7 +214,7 @@ impl Buffers {
         let px_bytes = layout.total_px as u64 * 4;
         let kp_bytes = layout.capacity as u64 * KP_WORDS * 4;
         let largest = px_bytes.max(kp_bytes);
-        let max_binding = limits.max_storage_buffer_binding_size as u64;
+        let max_binding = limits.max_storage_buffer_binding_size;
         if largest > max_binding || largest > limits.max_buffer_size {
             return Err(Error::GpuLimits {
                 reason: format!(

@@ -1,7 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// `../shared/data/<rel>` if it exists. When it does not: in CI (env CI set)
 /// the test fails, elsewhere it prints why and the caller skips.
@@ -22,8 +22,8 @@ pub fn data(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
 }
 
-/// Runs the `lfast` binary with `args`.
-pub fn lfast(args: &[&dyn AsRef<std::ffi::OsStr>]) -> std::process::Output {
+/// The `lfast` binary with `args` and extra environment variables, not yet started.
+pub fn command(args: &[&dyn AsRef<std::ffi::OsStr>], env: &[(&str, &str)]) -> std::process::Command {
     let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_lfast"));
     // Mesa's Vulkan drivers print a line to stderr when this is unset (headless
     // machines); the tests count stderr lines.
@@ -33,7 +33,15 @@ pub fn lfast(args: &[&dyn AsRef<std::ffi::OsStr>]) -> std::process::Output {
     for a in args {
         c.arg(a);
     }
-    c.output().expect("the lfast binary runs")
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c
+}
+
+/// Runs the `lfast` binary with `args`.
+pub fn lfast(args: &[&dyn AsRef<std::ffi::OsStr>]) -> std::process::Output {
+    command(args, &[]).output().expect("the lfast binary runs")
 }
 
 /// A process's stdout as text.
@@ -44,4 +52,58 @@ pub fn stdout(o: &std::process::Output) -> String {
 /// A process's stderr as text.
 pub fn stderr(o: &std::process::Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Exit status, stdout and stderr of a run, for assertion messages.
+pub fn show(o: &std::process::Output) -> String {
+    format!("exit {:?}\nstdout: {}\nstderr: {}", o.status, stdout(o), stderr(o))
+}
+
+/// The `summary:` line's (done, skipped, failed) of a batch run.
+pub fn summary(o: &std::process::Output) -> (u64, u64, u64) {
+    let text = stdout(o);
+    let line = text.lines().rfind(|l| l.starts_with("summary: ")).unwrap_or_else(|| panic!("no summary\n{}", show(o)));
+    let num = |key: &str| -> u64 {
+        let rest = &line[line.find(key).unwrap_or_else(|| panic!("no `{key}` in {line:?}")) + key.len()..];
+        rest.trim_start().split(|c: char| !c.is_ascii_digit()).next().unwrap().parse().unwrap()
+    };
+    (num("done"), num("skipped"), num("failed"))
+}
+
+/// The features `lfast detect` wrote to a JSON file.
+pub fn read_features(p: &Path) -> lfast::io::Features {
+    let text = std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// Every file under `dir` (hidden ones included), relative with `/`, sorted;
+/// empty when `dir` does not exist.
+pub fn files(dir: &Path) -> Vec<String> {
+    fn walk(root: &Path, d: &Path, out: &mut Vec<String>) {
+        for e in std::fs::read_dir(d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(root, &p, out);
+            } else {
+                out.push(p.strip_prefix(root).unwrap().to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+    let mut v = Vec::new();
+    if dir.exists() {
+        walk(dir, dir, &mut v);
+    }
+    v.sort();
+    v
+}
+
+/// A `w x h` plane with `f(x, y)` at every pixel.
+pub fn plane_fn(w: u32, h: u32, mut f: impl FnMut(u32, u32) -> u8) -> lfast::Plane<u8> {
+    lfast::Plane::from_vec(w, h, (0..w * h).map(|i| f(i % w, i / w)).collect()).expect("plane size")
+}
+
+/// The `w x h` window of `img` at (x0, y0), clipped to the image.
+pub fn crop(img: &lfast::Plane<u8>, x0: u32, y0: u32, w: u32, h: u32) -> lfast::Plane<u8> {
+    let (w, h) = (w.min(img.width - x0), h.min(img.height - y0));
+    plane_fn(w, h, |x, y| img.at(x0 + x, y0 + y))
 }
