@@ -3,10 +3,13 @@
 use crate::config::Config;
 use crate::cpu::CpuDetector;
 use crate::error::{Error, Result};
+#[cfg(feature = "gpu")]
 use crate::gpu::detector::{GpuDetector, GpuWorkspace};
+#[cfg(feature = "gpu")]
 use crate::gpu::{GpuContext, GpuOptions};
 use crate::image::{GrayView, Plane};
 use crate::keypoint::{Descriptor, KeyPoint};
+#[cfg(feature = "gpu")]
 use std::sync::Mutex;
 
 /// Which path runs.
@@ -37,10 +40,15 @@ impl std::str::FromStr for Backend {
     }
 }
 
+#[cfg(feature = "gpu")]
 struct Gpu {
     det: GpuDetector,
     ws: Mutex<Option<GpuWorkspace>>,
 }
+
+/// Built without the `gpu` feature: there is never a GPU (an uninhabited type).
+#[cfg(not(feature = "gpu"))]
+enum Gpu {}
 
 /// L-FAST on the GPU or the CPU, with the same results (see docs/algorithm.md).
 ///
@@ -56,6 +64,7 @@ pub struct Detector {
     cpu: CpuDetector,
     gpu: Option<Gpu>,
     /// Auto mode: fall back to the CPU on GPU failures.
+    #[cfg_attr(not(feature = "gpu"), allow(dead_code))]
     auto: bool,
     /// Set once the GPU failed in Auto mode; later frames go to the CPU.
     fell_back: std::sync::atomic::AtomicBool,
@@ -70,11 +79,23 @@ impl std::fmt::Debug for Detector {
 impl Detector {
     /// A detector on `backend`, choosing the adapter from the environment
     /// (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`).
+    /// Without the `gpu` feature, `Backend::Gpu` is an [`Error::Unsupported`]
+    /// and `Backend::Auto` is the CPU.
     pub fn new(cfg: Config, backend: Backend) -> Result<Self> {
-        Self::with_gpu_options(cfg, backend, &GpuOptions::default())
+        #[cfg(feature = "gpu")]
+        return Self::with_gpu_options(cfg, backend, &GpuOptions::default());
+        #[cfg(not(feature = "gpu"))]
+        {
+            let cpu = CpuDetector::new(cfg)?;
+            if backend == Backend::Gpu {
+                return Err(Error::Unsupported { reason: "lfast was built without its `gpu` feature".into() });
+            }
+            Ok(Self { cpu, gpu: None, auto: backend == Backend::Auto, fell_back: Default::default() })
+        }
     }
 
     /// [`new`](Self::new) with explicit adapter options.
+    #[cfg(feature = "gpu")]
     pub fn with_gpu_options(cfg: Config, backend: Backend, opts: &GpuOptions) -> Result<Self> {
         let cpu = CpuDetector::new(cfg.clone())?;
         let auto = backend == Backend::Auto;
@@ -98,6 +119,7 @@ impl Detector {
     }
 
     /// A detector on an embedder's device.
+    #[cfg(feature = "gpu")]
     pub fn from_context(ctx: GpuContext, cfg: Config) -> Result<Self> {
         let cpu = CpuDetector::new(cfg.clone())?;
         let det = GpuDetector::new(ctx, cfg)?;
@@ -107,6 +129,7 @@ impl Detector {
     /// A detector on an embedder's device that, like [`Backend::Auto`], runs a
     /// frame on the CPU (with a logged warning) when the GPU fails on it, and
     /// stays on the CPU after a device loss.
+    #[cfg(feature = "gpu")]
     pub fn from_context_with_fallback(ctx: GpuContext, cfg: Config) -> Result<Self> {
         let mut d = Self::from_context(ctx, cfg)?;
         d.auto = true;
@@ -120,7 +143,10 @@ impl Detector {
 
     /// The GPU adapter's name, when the GPU is in use.
     pub fn adapter_name(&self) -> Option<String> {
-        self.active_gpu().map(|g| g.det.context().info.name.clone())
+        #[cfg(feature = "gpu")]
+        return self.active_gpu().map(|g| g.det.context().info.name.clone());
+        #[cfg(not(feature = "gpu"))]
+        self.active_gpu().map(|g| match *g {})
     }
 
     /// The configuration.
@@ -135,6 +161,7 @@ impl Detector {
     /// Runs `f` on the GPU; in Auto mode a GPU failure (device lost, out of
     /// memory, a frame over the device's limits) is logged and the frame goes
     /// to the CPU — and so do later frames after a device loss.
+    #[cfg(feature = "gpu")]
     fn run<T>(
         &self,
         on_gpu: impl FnOnce(&GpuDetector, &mut Option<GpuWorkspace>) -> Result<T>,
@@ -172,10 +199,13 @@ impl Detector {
         if image.width() == 0 || image.height() == 0 {
             return self.cpu.detect_and_compute(image, mask);
         }
-        self.run(
+        #[cfg(feature = "gpu")]
+        return self.run(
             |g, ws| g.detect_and_compute(ws, image, mask).map(|f| (f.keypoints, f.descriptors)),
             |c| c.detect_and_compute(image, mask),
-        )
+        );
+        #[cfg(not(feature = "gpu"))]
+        self.cpu.detect_and_compute(image, mask)
     }
 
     /// Keypoints only.
@@ -186,6 +216,9 @@ impl Detector {
     /// The improved Canny edge map E (255 = edge).
     pub fn edge_image(&self, image: GrayView<'_>) -> Result<Plane<u8>> {
         image.check()?;
-        self.run(|g, ws| g.edge_image(ws, image), |c| c.edge_image(image))
+        #[cfg(feature = "gpu")]
+        return self.run(|g, ws| g.edge_image(ws, image), |c| c.edge_image(image));
+        #[cfg(not(feature = "gpu"))]
+        self.cpu.edge_image(image)
     }
 }

@@ -1,5 +1,5 @@
 //! The CPU reference path: one module per stage, named as its shader in
-//! shaders/, and [`CpuDetector`], which chains them as SPEC.md says.
+//! shaders/, and [`CpuDetector`], which chains them as SPEC says.
 //!
 //! Every stage is a plain function over [`Plane`]s, so a test can run any one
 //! of them on the output of the previous stage (the GPU cross-check does

@@ -1,5 +1,5 @@
 //! SPEC 11: the rBRIEF descriptor on the smoothed level image, with the ORB
-//! pattern of shared/data/orb_bit_pattern_31.txt (copied to data/).
+//! pattern of data/orb_bit_pattern_31.txt (embedded at compile time).
 //! Mirrors shaders/orb.wgsl.
 
 use crate::image::Plane;

@@ -65,7 +65,7 @@ fn twelve(path: &Path, line: usize, tokens: &[&str]) -> Result<[f64; 12], VoErro
 }
 
 /// Parses a KITTI `calib.txt`. Rows are labelled (`P0: ...`, as KITTI ships
-/// it) or unlabelled (12 numbers each, P0 first, as in ../shared). With
+/// it) or unlabelled (12 numbers each, P0 first, as in the project's KITTI test data). With
 /// labels, the `P0:` row is used; without, the first row.
 ///
 /// ```
