@@ -25,7 +25,10 @@ const CAMERA: &str = "tests/data/camera_cc0_v0.18plus.png";
 fn load(rel: &str) -> Option<Plane<u8>> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
     if !path.exists() {
-        eprintln!("skipping benchmarks on {}: file not found (../shared/data is absent in a plain clone)", path.display());
+        eprintln!(
+            "skipping benchmarks on {}: file not found (../shared/data is absent in a plain clone)",
+            path.display()
+        );
         return None;
     }
     Some(lfast::image::load_gray(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))

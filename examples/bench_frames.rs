@@ -84,7 +84,8 @@ fn main() -> lfast::Result<()> {
     });
     let (lfast, n_lfast) =
         time_passes(&frames, repeats, |img| det.detect_and_compute(img.view(), None).expect("valid image").0.len());
-    let (orb_t, n_orb) = time_passes(&frames, repeats, |img| orb.detect_and_compute(img.view()).expect("valid image").0.len());
+    let (orb_t, n_orb) =
+        time_passes(&frames, repeats, |img| orb.detect_and_compute(img.view()).expect("valid image").0.len());
 
     let mut sizes: Vec<[u32; 2]> = frames.iter().map(|f| [f.width, f.height]).collect();
     sizes.sort_unstable();

@@ -203,7 +203,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         })
     };
     let bg_pipeline = pipeline("bg_vs", "bg_fs", None, wgpu::PrimitiveTopology::TriangleList);
-    let kp_pipeline = pipeline("kp_vs", "kp_fs", Some(wgpu::BlendState::REPLACE), wgpu::PrimitiveTopology::TriangleStrip);
+    let kp_pipeline =
+        pipeline("kp_vs", "kp_fs", Some(wgpu::BlendState::REPLACE), wgpu::PrimitiveTopology::TriangleStrip);
 
     // One encoder: the detector's compute passes, then our render pass.
     let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });

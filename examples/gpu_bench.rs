@@ -50,7 +50,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut paths = Vec::new();
     for p in &inputs {
         if p.is_dir() {
-            let mut v: Vec<_> = std::fs::read_dir(p)?.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == "png")).collect();
+            let mut v: Vec<_> = std::fs::read_dir(p)?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|e| e == "png"))
+                .collect();
             v.sort();
             paths.extend(v);
         } else {
@@ -72,7 +75,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ctx = GpuContext::new(&GpuOptions::default())?;
     println!("adapter: {} ({:?}), {} frames of {w}x{h}, ring {ring}", ctx.info.name, ctx.info.backend, imgs.len());
     // per-pass times: a detector that records timestamp queries
-    let prof = GpuDetector::with_options(ctx.clone(), Config::default(), GpuDetectorOptions { ring, profile: true, ..Default::default() })?;
+    let prof = GpuDetector::with_options(
+        ctx.clone(),
+        Config::default(),
+        GpuDetectorOptions { ring, profile: true, ..Default::default() },
+    )?;
     let mut pws = Some(prof.workspace(w, h)?);
     for img in imgs.iter().take(3) {
         prof.detect_and_compute(&mut pws, img.view(), None)?; // warm-up: compilation, first allocations
@@ -89,7 +96,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     drop(pws);
 
     // the rest without timestamps, as an application runs it
-    let det = GpuDetector::with_options(ctx.clone(), Config::default(), GpuDetectorOptions { ring, profile: false, ..Default::default() })?;
+    let det = GpuDetector::with_options(
+        ctx.clone(),
+        Config::default(),
+        GpuDetectorOptions { ring, profile: false, ..Default::default() },
+    )?;
     let mut ws = Some(det.workspace(w, h)?);
     for img in imgs.iter().take(3) {
         det.detect_and_compute(&mut ws, img.view(), None)?;

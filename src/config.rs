@@ -111,7 +111,10 @@ impl Config {
             return Err(bad("straight_tol", format!("must be 0..=7, got {}", self.straight_tol)));
         }
         if self.border < 7 {
-            return Err(bad("border", format!("must be >= 7 (the L-FAST test reads 7 pixels out), got {}", self.border)));
+            return Err(bad(
+                "border",
+                format!("must be >= 7 (the L-FAST test reads 7 pixels out), got {}", self.border),
+            ));
         }
         if self.border > 1024 {
             return Err(bad("border", format!("must be <= 1024, got {}", self.border)));
@@ -126,7 +129,10 @@ impl Config {
             return Err(bad("scale_factor", format!("must be a finite number in (1, 4], got {}", self.scale_factor)));
         }
         if self.orientation_bins > 360 {
-            return Err(bad("orientation_bins", format!("must be 0 (continuous) or 1..=360, got {}", self.orientation_bins)));
+            return Err(bad(
+                "orientation_bins",
+                format!("must be 0 (continuous) or 1..=360, got {}", self.orientation_bins),
+            ));
         }
         Ok(())
     }

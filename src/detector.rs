@@ -110,12 +110,7 @@ impl Detector {
                 }
             },
         };
-        Ok(Self {
-            cpu,
-            gpu: gpu.map(|det| Gpu { det, ws: Mutex::new(None) }),
-            auto,
-            fell_back: Default::default(),
-        })
+        Ok(Self { cpu, gpu: gpu.map(|det| Gpu { det, ws: Mutex::new(None) }), auto, fell_back: Default::default() })
     }
 
     /// A detector on an embedder's device.

@@ -107,7 +107,11 @@ impl<'a> GrayView<'a> {
     pub fn new(width: u32, height: u32, stride: usize, data: &'a [u8]) -> Result<Self> {
         check_size(width, height)?;
         if stride < width as usize {
-            return Err(Error::InvalidImage { width, height, reason: format!("row stride {stride} is less than the width") });
+            return Err(Error::InvalidImage {
+                width,
+                height,
+                reason: format!("row stride {stride} is less than the width"),
+            });
         }
         let need = stride.checked_mul(height as usize - 1).and_then(|n| n.checked_add(width as usize));
         let Some(_) = need.filter(|&n| n <= data.len()) else {
@@ -185,7 +189,11 @@ pub fn check_size(width: u32, height: u32) -> Result<()> {
         return Err(Error::InvalidImage { width, height, reason: "the image is empty".into() });
     }
     if width > MAX_SIDE || height > MAX_SIDE {
-        return Err(Error::InvalidImage { width, height, reason: format!("a side exceeds the limit of {MAX_SIDE} pixels") });
+        return Err(Error::InvalidImage {
+            width,
+            height,
+            reason: format!("a side exceeds the limit of {MAX_SIDE} pixels"),
+        });
     }
     Ok(())
 }

@@ -3,10 +3,10 @@
 //! CPU planes into atlas levels, one pass run on its own, downloads. It lives
 //! outside `gpu/` because it feeds the GPU passes with the CPU path's outputs.
 
+use crate::error::{Error, Result};
 use crate::gpu::buffers::Buffers;
 use crate::gpu::context::{GpuContext, GpuOptions};
 use crate::gpu::pass::Pass;
-use crate::error::{Error, Result};
 use crate::image::Plane;
 
 /// The test device, or `None` (with a note on stderr) when there is no
@@ -76,7 +76,8 @@ pub fn run<P: Pass>(ctx: &GpuContext, pass: &P, b: &Buffers) -> Result<()> {
     let mut enc = ctx.device.create_command_encoder(&Default::default());
     pass.prepare(&mut enc, b);
     {
-        let mut cp = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(P::NAME), timestamp_writes: None });
+        let mut cp =
+            enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(P::NAME), timestamp_writes: None });
         pass.record(&mut cp, &bound, b);
     }
     ctx.queue.submit([enc.finish()]);
@@ -112,7 +113,15 @@ pub fn test_image(w: u32, h: u32, seed: u32) -> Plane<u8> {
     };
     let mut p = Plane::<u8>::new(w, h);
     let blocks: Vec<(u32, u32, u32, u32, u8)> = (0..8)
-        .map(|_| (next() % w.max(1), next() % h.max(1), 3 + next() % (w / 2 + 3), 3 + next() % (h / 2 + 3), (next() % 256) as u8))
+        .map(|_| {
+            (
+                next() % w.max(1),
+                next() % h.max(1),
+                3 + next() % (w / 2 + 3),
+                3 + next() % (h / 2 + 3),
+                (next() % 256) as u8,
+            )
+        })
         .collect();
     for y in 0..h {
         for x in 0..w {

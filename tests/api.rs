@@ -171,10 +171,8 @@ fn mean_nn_distance(kps: &[KeyPoint]) -> f64 {
     let n = kps.len();
     let mut sum = 0.0;
     for i in 0..n {
-        let best = (0..n)
-            .filter(|&j| j != i)
-            .map(|j| (kps[i].pt - kps[j].pt).length() as f64)
-            .fold(f64::INFINITY, f64::min);
+        let best =
+            (0..n).filter(|&j| j != i).map(|j| (kps[i].pt - kps[j].pt).length() as f64).fold(f64::INFINITY, f64::min);
         sum += best;
     }
     sum / n as f64
@@ -287,8 +285,11 @@ fn masks() {
     // wrong size
     let small = mask_plane(w - 1, h, |_, _| true);
     let e = d.detect_and_compute(img.view(), Some(small.view())).unwrap_err();
-    assert!(matches!(e, Error::MaskSize { mask_width, mask_height, width, height }
-        if (mask_width, mask_height, width, height) == (w - 1, h, w, h)), "{e:?}");
+    assert!(
+        matches!(e, Error::MaskSize { mask_width, mask_height, width, height }
+        if (mask_width, mask_height, width, height) == (w - 1, h, w, h)),
+        "{e:?}"
+    );
     let tall = mask_plane(w, h + 1, |_, _| true);
     assert!(matches!(d.detect(img.view(), Some(tall.view())), Err(Error::MaskSize { .. })));
 }
@@ -361,7 +362,10 @@ fn tiny_images_do_not_panic() {
 
             let f = fast9(&img, 20, true);
             for k in &f {
-                assert!(k.pt.x >= 3.0 && k.pt.y >= 3.0 && k.pt.x + 3.0 < w as f32 && k.pt.y + 3.0 < h as f32, "{w}x{h}: {k:?}");
+                assert!(
+                    k.pt.x >= 3.0 && k.pt.y >= 3.0 && k.pt.x + 3.0 < w as f32 && k.pt.y + 3.0 < h as f32,
+                    "{w}x{h}: {k:?}"
+                );
             }
             if w < 7 || h < 7 {
                 assert!(f.is_empty(), "{w}x{h}: FAST needs a radius-3 circle");

@@ -365,7 +365,8 @@ fn orb_detector_honours_orientation_bins() {
     let cfg_path = tmp.path().join("continuous.toml");
     std::fs::write(&cfg_path, cfg.to_toml_string()).unwrap();
     let out = tmp.path().join("orb");
-    let o = lfast(&[&"detect", &img, &"--out", &out, &"--detector", &"orb", &"--backend", &"cpu", &"--config", &cfg_path]);
+    let o =
+        lfast(&[&"detect", &img, &"--out", &out, &"--detector", &"orb", &"--backend", &"cpu", &"--config", &cfg_path]);
     assert!(o.status.success(), "{}", show(&o));
     let f = read_features(&out.join("coins.json"));
     let params = OrbParams { orientation_bins: 0, ..OrbParams::default() };

@@ -152,8 +152,7 @@ fn check_png(file: &str, got: &Plane<u8>) -> Result<(), String> {
     lfast::image::save_gray(got, &actual).unwrap();
     let gained = diffs.iter().filter(|d| d.2 != 0 && d.3 == 0).count();
     let lost = diffs.iter().filter(|d| d.2 == 0 && d.3 != 0).count();
-    let first: Vec<String> =
-        diffs.iter().take(8).map(|&(x, y, g, e)| format!("({x},{y}) got {g} want {e}")).collect();
+    let first: Vec<String> = diffs.iter().take(8).map(|&(x, y, g, e)| format!("({x},{y}) got {g} want {e}")).collect();
     Err(format!(
         "{file}: {} of {} pixels differ ({gained} new edge pixels, {lost} lost); first: {}; actual written to {}",
         diffs.len(),

@@ -11,8 +11,8 @@ use lfast::gpu::hysteresis::HysteresisPass;
 use lfast::gpu::lfast::LfastPass;
 use lfast::gpu::rules::RulesPass;
 use lfast::gpu::{Buffers, GpuContext, Pass};
-use lfast::testing as t;
 use lfast::image::load_gray;
+use lfast::testing as t;
 use lfast::{Config, Mode, Plane};
 
 // ---------------------------------------------------------------- helpers
@@ -52,19 +52,10 @@ fn to_u32(p: &Plane<u8>) -> Vec<u32> {
 /// Crops of at most ~200x150 of every test image (lavapipe is slow).
 fn real_images() -> Vec<(String, Plane<u8>)> {
     let mut out = Vec::new();
-    for name in [
-        "astronaut_256",
-        "camera_cc0_v0.18plus",
-        "chessboard_GRAY",
-        "coins",
-        "text",
-    ] {
+    for name in ["astronaut_256", "camera_cc0_v0.18plus", "chessboard_GRAY", "coins", "text"] {
         let img = load_gray(format!("tests/data/{name}.png")).expect("test image");
         let (w, h) = (img.width.min(200), img.height.min(150));
-        out.push((
-            name.to_string(),
-            crop(&img, (img.width - w) / 2, (img.height - h) / 2, w, h),
-        ));
+        out.push((name.to_string(), crop(&img, (img.width - w) / 2, (img.height - h) / 2, w, h)));
     }
     out
 }
@@ -111,11 +102,7 @@ fn spiral(w: u32, h: u32) -> (Plane<u8>, Vec<(u32, u32)>) {
     for k in 0usize.. {
         let (dx, dy) = dirs[k % 4];
         let side = if k % 2 == 0 { w } else { h } as i64;
-        let len = if k == 0 {
-            side - 1
-        } else {
-            side - 1 - 2 * ((k as i64 - 1) / 2)
-        };
+        let len = if k == 0 { side - 1 } else { side - 1 - 2 * ((k as i64 - 1) / 2) };
         if len <= 0 {
             break;
         }
@@ -136,11 +123,7 @@ fn spiral(w: u32, h: u32) -> (Plane<u8>, Vec<(u32, u32)>) {
 fn snake(w: u32, h: u32) -> (Plane<u8>, Vec<(u32, u32)>) {
     let mut path = Vec::new();
     for y in (0..h).step_by(2) {
-        let row: Vec<u32> = if (y / 2) % 2 == 0 {
-            (0..w).collect()
-        } else {
-            (0..w).rev().collect()
-        };
+        let row: Vec<u32> = if (y / 2) % 2 == 0 { (0..w).collect() } else { (0..w).rev().collect() };
         path.extend(row.iter().map(|&x| (x, y)));
         if y + 1 < h {
             path.push((if (y / 2) % 2 == 0 { w - 1 } else { 0 }, y + 1));
@@ -155,13 +138,7 @@ fn snake(w: u32, h: u32) -> (Plane<u8>, Vec<(u32, u32)>) {
 
 /// Runs hysteresis on the given ruled planes (one per level of `b`) and
 /// compares every level with the CPU.
-fn check_hysteresis(
-    ctx: &GpuContext,
-    pass: &HysteresisPass,
-    b: &Buffers,
-    planes: &[Plane<u8>],
-    what: &str,
-) {
+fn check_hysteresis(ctx: &GpuContext, pass: &HysteresisPass, b: &Buffers, planes: &[Plane<u8>], what: &str) {
     poison(ctx, b, &b.labels, 0xdead_beef);
     poison(ctx, b, &b.flags, 1);
     poison(ctx, b, &b.edges, 7);
@@ -191,15 +168,8 @@ fn check_hysteresis(
 fn gpu_candidates(ctx: &GpuContext, b: &Buffers, l: usize) -> Vec<[u32; 2]> {
     let (w, _) = b.layout.sizes[l];
     let v = t::download_level(ctx, b, &b.cand, l).unwrap();
-    assert!(
-        v.iter().all(|&c| c <= 1),
-        "level {l}: cand holds values other than 0/1"
-    );
-    v.iter()
-        .enumerate()
-        .filter(|(_, c)| **c == 1)
-        .map(|(i, _)| [i as u32 % w, i as u32 / w])
-        .collect()
+    assert!(v.iter().all(|&c| c <= 1), "level {l}: cand holds values other than 0/1");
+    v.iter().enumerate().filter(|(_, c)| **c == 1).map(|(i, _)| [i as u32 % w, i as u32 / w]).collect()
 }
 
 /// Uploads edge maps (and masks) per level, sets `use_mask`, runs L-FAST
@@ -230,14 +200,7 @@ fn check_lfast(
     for (l, e) in edges.iter().enumerate() {
         let want = cpu_lfast(e, masks.map(|m| &m[l]), &lp);
         let got = gpu_candidates(ctx, b, l);
-        assert_eq!(
-            got,
-            want,
-            "{what} level {l} ({}x{}) {lp:?} mask {}",
-            e.width,
-            e.height,
-            masks.is_some()
-        );
+        assert_eq!(got, want, "{what} level {l} ({}x{}) {lp:?} mask {}", e.width, e.height, masks.is_some());
         total += want.len();
     }
     total
@@ -295,19 +258,13 @@ fn random_edges(w: u32, h: u32, rng: &mut XorRng) -> Plane<u8> {
 fn shaders_validate_and_bindings_match() {
     use lfast::gpu::kernel::{Slot, full_source};
     use naga::{AddressSpace, StorageAccess};
-    for s in lfast::gpu::SHADERS
-        .iter()
-        .filter(|s| ["rules", "hysteresis", "lfast"].contains(&s.name))
-    {
+    for s in lfast::gpu::SHADERS.iter().filter(|s| ["rules", "hysteresis", "lfast"].contains(&s.name)) {
         let src = full_source(s.source);
         let m = naga::front::wgsl::parse_str(&src)
             .unwrap_or_else(|e| panic!("{}.wgsl: {}", s.name, e.emit_to_string(&src)));
-        naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::empty(),
-        )
-        .validate(&m)
-        .unwrap_or_else(|e| panic!("{}.wgsl does not validate: {e:?}", s.name));
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+            .validate(&m)
+            .unwrap_or_else(|e| panic!("{}.wgsl does not validate: {e:?}", s.name));
         let mut found: Vec<(u32, String, Slot)> = m
             .global_variables
             .iter()
@@ -315,9 +272,7 @@ fn shaders_validate_and_bindings_match() {
                 let rb = g.binding.as_ref()?;
                 let slot = match g.space {
                     AddressSpace::Uniform => Slot::Uniform,
-                    AddressSpace::Storage { access } if access.contains(StorageAccess::STORE) => {
-                        Slot::ReadWrite
-                    }
+                    AddressSpace::Storage { access } if access.contains(StorageAccess::STORE) => Slot::ReadWrite,
                     AddressSpace::Storage { .. } => Slot::Read,
                     _ => Slot::Texture,
                 };
@@ -325,11 +280,8 @@ fn shaders_validate_and_bindings_match() {
             })
             .collect();
         found.sort_by_key(|f| f.0);
-        let declared: Vec<(u32, String, Slot)> = s
-            .bindings
-            .iter()
-            .map(|b| (b.binding, b.name.to_string(), b.slot))
-            .collect();
+        let declared: Vec<(u32, String, Slot)> =
+            s.bindings.iter().map(|b| (b.binding, b.name.to_string(), b.slot)).collect();
         assert_eq!(found, declared, "{}", s.name);
     }
 }
@@ -340,10 +292,7 @@ fn shaders_validate_and_bindings_match() {
 fn rules_literal_case() {
     let Some(ctx) = t::context() else { return };
     let pass = RulesPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 1,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, ..Config::default() };
     // the CPU module's doc and unit cases side by side, in one 6x3 image
     #[rustfmt::skip]
     let c = plane(6, 3, vec![
@@ -362,10 +311,7 @@ fn rules_literal_case() {
         WEAK, 0, WEAK, WEAK, WEAK, 0,
     ];
     assert_eq!(rules(&c).data, want);
-    assert_eq!(
-        t::download_level(&ctx, &b, &b.ruled, 0).unwrap(),
-        want.iter().map(|&v| v as u32).collect::<Vec<_>>()
-    );
+    assert_eq!(t::download_level(&ctx, &b, &b.ruled, 0).unwrap(), want.iter().map(|&v| v as u32).collect::<Vec<_>>());
 }
 
 #[test]
@@ -373,37 +319,17 @@ fn rules_match_cpu_on_random_classes() {
     let Some(ctx) = t::context() else { return };
     let pass = RulesPass::new(&ctx.device);
     let mut rng = XorRng::new(7);
-    for (w, h, levels) in [
-        (37, 29, 3),
-        (130, 75, 4),
-        (17, 1, 1),
-        (1, 1, 1),
-        (1, 19, 2),
-        (16, 16, 2),
-        (64, 33, 5),
-    ] {
-        let cfg = Config {
-            n_levels: levels,
-            ..Config::default()
-        };
+    for (w, h, levels) in [(37, 29, 3), (130, 75, 4), (17, 1, 1), (1, 1, 1), (1, 19, 2), (16, 16, 2), (64, 33, 5)] {
+        let cfg = Config { n_levels: levels, ..Config::default() };
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         poison(&ctx, &b, &b.ruled, 9);
-        let planes: Vec<Plane<u8>> = b
-            .layout
-            .sizes
-            .iter()
-            .map(|&(lw, lh)| random_classes(lw, lh, &mut rng))
-            .collect();
+        let planes: Vec<Plane<u8>> = b.layout.sizes.iter().map(|&(lw, lh)| random_classes(lw, lh, &mut rng)).collect();
         for (l, p) in planes.iter().enumerate() {
             t::upload_plane(&ctx, &b, &b.classes, l, p);
         }
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in planes.iter().enumerate() {
-            assert_eq!(
-                t::download_level(&ctx, &b, &b.ruled, l).unwrap(),
-                to_u32(&rules(p)),
-                "{w}x{h} level {l}"
-            );
+            assert_eq!(t::download_level(&ctx, &b, &b.ruled, l).unwrap(), to_u32(&rules(p)), "{w}x{h} level {l}");
         }
     }
 }
@@ -415,10 +341,7 @@ fn rules_and_hysteresis_match_cpu_on_real_images() {
     let Some(ctx) = t::context() else { return };
     let rp = RulesPass::new(&ctx.device);
     let hp = HysteresisPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 3,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 3, ..Config::default() };
     for (name, img) in real_images() {
         let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
         let levels = t::cpu_levels(&cfg, &img);
@@ -428,25 +351,14 @@ fn rules_and_hysteresis_match_cpu_on_real_images() {
         }
         t::run(&ctx, &rp, &b).unwrap();
         for (l, em) in ems.iter().enumerate() {
-            assert_eq!(
-                t::download_level(&ctx, &b, &b.ruled, l).unwrap(),
-                to_u32(&em.ruled),
-                "{name} rules level {l}"
-            );
+            assert_eq!(t::download_level(&ctx, &b, &b.ruled, l).unwrap(), to_u32(&em.ruled), "{name} rules level {l}");
         }
         let ruled: Vec<Plane<u8>> = ems.iter().map(|em| em.ruled.clone()).collect();
         check_hysteresis(&ctx, &hp, &b, &ruled, &name);
         for (l, em) in ems.iter().enumerate() {
-            assert_eq!(
-                t::download_level(&ctx, &b, &b.edges, l).unwrap(),
-                to_u32(&em.edges),
-                "{name} edges level {l}"
-            );
+            assert_eq!(t::download_level(&ctx, &b, &b.edges, l).unwrap(), to_u32(&em.edges), "{name} edges level {l}");
         }
-        assert!(
-            ems[0].edges.data.contains(&EDGE),
-            "{name}: the test needs edges"
-        );
+        assert!(ems[0].edges.data.contains(&EDGE), "{name}: the test needs edges");
     }
 }
 
@@ -456,10 +368,7 @@ fn rules_and_hysteresis_match_cpu_on_real_images() {
 fn hysteresis_literal_case() {
     let Some(ctx) = t::context() else { return };
     let pass = HysteresisPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 1,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 5, 3).unwrap();
     // the doc example on row 0; a diagonal WEAK chain reaching STRONG on rows
     // 1-2; an isolated WEAK and an isolated STRONG
@@ -484,34 +393,14 @@ fn hysteresis_matches_cpu_on_random_planes() {
     let Some(ctx) = t::context() else { return };
     let pass = HysteresisPass::new(&ctx.device);
     let mut rng = XorRng::new(11);
-    for (w, h, levels) in [
-        (37, 29, 3),
-        (130, 75, 4),
-        (17, 1, 1),
-        (1, 1, 1),
-        (1, 40, 2),
-        (200, 150, 3),
-    ] {
-        let cfg = Config {
-            n_levels: levels,
-            ..Config::default()
-        };
+    for (w, h, levels) in [(37, 29, 3), (130, 75, 4), (17, 1, 1), (1, 1, 1), (1, 40, 2), (200, 150, 3)] {
+        let cfg = Config { n_levels: levels, ..Config::default() };
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         // from sparse to above the percolation threshold (one giant component)
         for (active, strong_in) in [(20, 10), (45, 40), (60, 300), (75, 2000), (100, 5000)] {
-            let planes: Vec<Plane<u8>> = b
-                .layout
-                .sizes
-                .iter()
-                .map(|&(lw, lh)| random_ruled(lw, lh, active, strong_in, &mut rng))
-                .collect();
-            check_hysteresis(
-                &ctx,
-                &pass,
-                &b,
-                &planes,
-                &format!("{w}x{h} active {active}% strong 1/{strong_in}"),
-            );
+            let planes: Vec<Plane<u8>> =
+                b.layout.sizes.iter().map(|&(lw, lh)| random_ruled(lw, lh, active, strong_in, &mut rng)).collect();
+            check_hysteresis(&ctx, &pass, &b, &planes, &format!("{w}x{h} active {active}% strong 1/{strong_in}"));
         }
     }
 }
@@ -525,51 +414,25 @@ fn hysteresis_long_snakes_and_spirals() {
 
     // A 1-pixel-wide spiral covering a 128x128 image, seeded at its inner end
     // (8000+ pixels), and the same seeded at the outer end.
-    let cfg = Config {
-        n_levels: 1,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 128, 128).unwrap();
     let (sp, path) = spiral(128, 128);
     assert!(path.len() > 8000, "{}", path.len());
-    assert_eq!(
-        sp.data.iter().filter(|&&v| v == WEAK).count(),
-        path.len(),
-        "the spiral never crosses itself"
-    );
+    assert_eq!(sp.data.iter().filter(|&&v| v == WEAK).count(), path.len(), "the spiral never crosses itself");
     for end in [path[path.len() - 1], path[0]] {
         let mut c = sp.clone();
         c.data[(end.1 * 128 + end.0) as usize] = STRONG;
-        check_hysteresis(
-            &ctx,
-            &pass,
-            &b,
-            std::slice::from_ref(&c),
-            &format!("spiral seeded at {end:?}"),
-        );
+        check_hysteresis(&ctx, &pass, &b, std::slice::from_ref(&c), &format!("spiral seeded at {end:?}"));
         let e = t::download_level(&ctx, &b, &b.edges, 0).unwrap();
-        assert_eq!(
-            e.iter().filter(|&&v| v == 255).count(),
-            path.len(),
-            "the whole spiral is one edge"
-        );
+        assert_eq!(e.iter().filter(|&&v| v == 255).count(), path.len(), "the whole spiral is one edge");
     }
     // unseeded: nothing
-    check_hysteresis(
-        &ctx,
-        &pass,
-        &b,
-        std::slice::from_ref(&sp),
-        "unseeded spiral",
-    );
+    check_hysteresis(&ctx, &pass, &b, std::slice::from_ref(&sp), "unseeded spiral");
 
     // A WEAK chain thousands long ending at one STRONG pixel: a serpentine on
     // level 0 (~15000 pixels), spirals on the other levels (seeded inside),
     // one of them cut in two so only the seeded half is edge.
-    let cfg = Config {
-        n_levels: 4,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 4, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 200, 150).unwrap();
     let mut planes = Vec::new();
     for (l, &(w, h)) in b.layout.sizes.iter().enumerate() {
@@ -589,10 +452,7 @@ fn hysteresis_long_snakes_and_spirals() {
     // Two interleaved combs (one seeded, one not) whose teeth run across every
     // tile row: the components are long and never touch.
     let (w, h) = (150u32, 100u32);
-    let cfg = Config {
-        n_levels: 2,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 2, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
     let mut planes = Vec::new();
     for &(lw, lh) in &b.layout.sizes {
@@ -651,21 +511,8 @@ mod prop {
 fn lfast_configs() -> Vec<Config> {
     let mut out = Vec::new();
     for mode in [Mode::Branch, Mode::Paper] {
-        for (support, straight_tol, border) in [
-            (4, 1, 16),
-            (4, 1, 7),
-            (1, 0, 7),
-            (3, 3, 9),
-            (8, 7, 7),
-            (6, 2, 12),
-        ] {
-            out.push(Config {
-                mode,
-                support,
-                straight_tol,
-                border,
-                ..Config::default()
-            });
+        for (support, straight_tol, border) in [(4, 1, 16), (4, 1, 7), (1, 0, 7), (3, 3, 9), (8, 7, 7), (6, 2, 12)] {
+            out.push(Config { mode, support, straight_tol, border, ..Config::default() });
         }
     }
     out
@@ -682,12 +529,7 @@ fn lfast_literal_l_corner() {
         e.data[((15 + i) * 31 + 15) as usize] = EDGE;
     }
     for mode in [Mode::Paper, Mode::Branch] {
-        let cfg = Config {
-            mode,
-            border: 7,
-            n_levels: 1,
-            ..Config::default()
-        };
+        let cfg = Config { mode, border: 7, n_levels: 1, ..Config::default() };
         let b = Buffers::new(&ctx.device, &cfg, 31, 31).unwrap();
         let n = check_lfast(&ctx, &pass, &cfg, &b, std::slice::from_ref(&e), None, "L");
         assert_eq!(gpu_candidates(&ctx, &b, 0), vec![[15, 15]], "{mode:?}");
@@ -695,18 +537,7 @@ fn lfast_literal_l_corner() {
         // border 16 leaves no pixel of a 31x31 level
         let cfg = Config { border: 16, ..cfg };
         let b = Buffers::new(&ctx.device, &cfg, 31, 31).unwrap();
-        assert_eq!(
-            check_lfast(
-                &ctx,
-                &pass,
-                &cfg,
-                &b,
-                std::slice::from_ref(&e),
-                None,
-                "L border 16"
-            ),
-            0
-        );
+        assert_eq!(check_lfast(&ctx, &pass, &cfg, &b, std::slice::from_ref(&e), None, "L border 16"), 0);
     }
 }
 
@@ -720,18 +551,9 @@ fn lfast_matches_cpu_on_real_edge_maps() {
     for (name, img) in &imgs {
         // edges of each CPU pyramid level (levels too small for the border
         // have an edge map too: they must give no candidate)
-        let lcfg = Config {
-            n_levels: 4,
-            ..Config::default()
-        };
-        let edges: Vec<Plane<u8>> = t::cpu_levels(&lcfg, img)
-            .iter()
-            .map(|p| edge_map(p, &lcfg).edges)
-            .collect();
-        let masks: Vec<Plane<u8>> = edges
-            .iter()
-            .map(|e| random_mask(e.width, e.height, &mut rng))
-            .collect();
+        let lcfg = Config { n_levels: 4, ..Config::default() };
+        let edges: Vec<Plane<u8>> = t::cpu_levels(&lcfg, img).iter().map(|p| edge_map(p, &lcfg).edges).collect();
+        let masks: Vec<Plane<u8>> = edges.iter().map(|e| random_mask(e.width, e.height, &mut rng)).collect();
         for cfg in lfast_configs() {
             let cfg = Config { n_levels: 4, ..cfg };
             let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
@@ -748,51 +570,14 @@ fn lfast_matches_cpu_on_random_edge_maps() {
     let pass = LfastPass::new(&ctx.device);
     let mut rng = XorRng::new(99);
     let mut total = 0;
-    for (w, h, levels) in [
-        (37, 29, 3),
-        (130, 75, 4),
-        (17, 1, 1),
-        (1, 1, 1),
-        (15, 15, 1),
-        (16, 40, 2),
-        (64, 64, 3),
-    ] {
+    for (w, h, levels) in [(37, 29, 3), (130, 75, 4), (17, 1, 1), (1, 1, 1), (15, 15, 1), (16, 40, 2), (64, 64, 3)] {
         for cfg in lfast_configs() {
-            let cfg = Config {
-                n_levels: levels,
-                ..cfg
-            };
+            let cfg = Config { n_levels: levels, ..cfg };
             let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
-            let edges: Vec<Plane<u8>> = b
-                .layout
-                .sizes
-                .iter()
-                .map(|&(lw, lh)| random_edges(lw, lh, &mut rng))
-                .collect();
-            let masks: Vec<Plane<u8>> = b
-                .layout
-                .sizes
-                .iter()
-                .map(|&(lw, lh)| random_mask(lw, lh, &mut rng))
-                .collect();
-            total += check_lfast(
-                &ctx,
-                &pass,
-                &cfg,
-                &b,
-                &edges,
-                None,
-                &format!("random {w}x{h}"),
-            );
-            check_lfast(
-                &ctx,
-                &pass,
-                &cfg,
-                &b,
-                &edges,
-                Some(&masks),
-                &format!("random {w}x{h}"),
-            );
+            let edges: Vec<Plane<u8>> = b.layout.sizes.iter().map(|&(lw, lh)| random_edges(lw, lh, &mut rng)).collect();
+            let masks: Vec<Plane<u8>> = b.layout.sizes.iter().map(|&(lw, lh)| random_mask(lw, lh, &mut rng)).collect();
+            total += check_lfast(&ctx, &pass, &cfg, &b, &edges, None, &format!("random {w}x{h}"));
+            check_lfast(&ctx, &pass, &cfg, &b, &edges, Some(&masks), &format!("random {w}x{h}"));
         }
     }
     assert!(total > 100, "random maps give candidates ({total})");
@@ -812,13 +597,7 @@ fn lfast_matches_cpu_on_every_circle_mask() {
     let (w, h) = (cols * 16, rows * 16);
     let mut rng = XorRng::new(3);
     for mode in [Mode::Branch, Mode::Paper] {
-        let cfg = Config {
-            mode,
-            border: 7,
-            n_levels: 1,
-            support: 2 + rng.below(4),
-            ..Config::default()
-        };
+        let cfg = Config { mode, border: 7, n_levels: 1, support: 2 + rng.below(4), ..Config::default() };
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         for batch in 0..(65536 / (cols * rows)) {
             let mut e = Plane::<u8>::new(w, h);
@@ -836,15 +615,7 @@ fn lfast_matches_cpu_on_every_circle_mask() {
                     e.data[((cy as i32 + dy) as u32 * w + (cx as i32 + dx) as u32) as usize] = v;
                 }
             }
-            check_lfast(
-                &ctx,
-                &pass,
-                &cfg,
-                &b,
-                std::slice::from_ref(&e),
-                None,
-                &format!("masks batch {batch}"),
-            );
+            check_lfast(&ctx, &pass, &cfg, &b, std::slice::from_ref(&e), None, &format!("masks batch {batch}"));
         }
     }
 }

@@ -39,26 +39,14 @@ struct Case {
 }
 
 fn case(ctx: &GpuContext, &(w, h, levels, seed, alpha_pct): &(u32, u32, u32, u32, u32)) -> Case {
-    let cfg = Config {
-        n_levels: levels,
-        alpha_pct,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: levels, alpha_pct, ..Config::default() };
     let img = t::test_image(w, h, seed);
-    cases_from(
-        ctx,
-        cfg,
-        &img,
-        format!("{w}x{h} seed {seed} alpha {alpha_pct}"),
-    )
+    cases_from(ctx, cfg, &img, format!("{w}x{h} seed {seed} alpha {alpha_pct}"))
 }
 
 fn cases_from(ctx: &GpuContext, cfg: Config, img: &Plane<u8>, name: String) -> Case {
     let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
-    let cpu = t::cpu_levels(&cfg, img)
-        .iter()
-        .map(|p| cpu::edge_map(p, &cfg))
-        .collect();
+    let cpu = t::cpu_levels(&cfg, img).iter().map(|p| cpu::edge_map(p, &cfg)).collect();
     Case { name, b, cpu }
 }
 
@@ -81,11 +69,7 @@ fn t1_word(em: &EdgeMap) -> u32 {
 
 /// The CPU windows as the GPU stores them: min, max, median, V3.
 fn window_words(em: &EdgeMap) -> Vec<u32> {
-    em.windows
-        .stats
-        .iter()
-        .flat_map(|s| [s.min as u32, s.max as u32, s.median as u32, s.v3()])
-        .collect()
+    em.windows.stats.iter().flat_map(|s| [s.min as u32, s.max as u32, s.median as u32, s.v3()]).collect()
 }
 
 #[test]
@@ -117,41 +101,17 @@ fn gradient_matches_cpu() {
 fn gradient_extremes() {
     let Some(ctx) = t::context() else { return };
     let pass = GradientPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 1,
-        ..Config::default()
-    };
-    for d in [
-        [0u8, 255, 0, 255],
-        [255, 0, 255, 0],
-        [0, 0, 0, 255],
-        [0, 255, 255, 255],
-        [255, 0, 0, 255],
-        [7, 7, 7, 7],
-    ] {
+    let cfg = Config { n_levels: 1, ..Config::default() };
+    for d in [[0u8, 255, 0, 255], [255, 0, 255, 0], [0, 0, 0, 255], [0, 255, 255, 255], [255, 0, 0, 255], [7, 7, 7, 7]]
+    {
         let d = Plane::from_vec(2, 2, d.to_vec()).unwrap();
         let b = Buffers::new(&ctx.device, &cfg, 2, 2).unwrap();
         t::upload_plane(&ctx, &b, &b.denoised, 0, &d);
         t::run(&ctx, &pass, &b).unwrap();
         let g = cpu::gradient::gradient(&d);
-        assert_eq!(
-            t::download_level(&ctx, &b, &b.gx, 0).unwrap(),
-            words(&g.gx2),
-            "{:?}",
-            d.data
-        );
-        assert_eq!(
-            t::download_level(&ctx, &b, &b.gy, 0).unwrap(),
-            words(&g.gy2),
-            "{:?}",
-            d.data
-        );
-        assert_eq!(
-            t::download_level(&ctx, &b, &b.m, 0).unwrap(),
-            words(&g.m),
-            "{:?}",
-            d.data
-        );
+        assert_eq!(t::download_level(&ctx, &b, &b.gx, 0).unwrap(), words(&g.gx2), "{:?}", d.data);
+        assert_eq!(t::download_level(&ctx, &b, &b.gy, 0).unwrap(), words(&g.gy2), "{:?}", d.data);
+        assert_eq!(t::download_level(&ctx, &b, &b.m, 0).unwrap(), words(&g.m), "{:?}", d.data);
     }
 }
 
@@ -161,10 +121,7 @@ fn gradient_extremes() {
 fn gradient_matches_cpu_on_noise() {
     let Some(ctx) = t::context() else { return };
     let pass = GradientPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 1,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, ..Config::default() };
     let (w, h) = (200u32, 150u32);
     let mut r = Rng(3);
     // Mostly 0 / 255 so the extremes are frequent, the rest uniform.
@@ -187,14 +144,8 @@ fn gradient_matches_cpu_on_noise() {
     for v in [-510, 510] {
         assert!(g.gx2.data.contains(&v) && g.gy2.data.contains(&v));
     }
-    assert_eq!(
-        t::download_level(&ctx, &b, &b.gx, 0).unwrap(),
-        words(&g.gx2)
-    );
-    assert_eq!(
-        t::download_level(&ctx, &b, &b.gy, 0).unwrap(),
-        words(&g.gy2)
-    );
+    assert_eq!(t::download_level(&ctx, &b, &b.gx, 0).unwrap(), words(&g.gx2));
+    assert_eq!(t::download_level(&ctx, &b, &b.gy, 0).unwrap(), words(&g.gy2));
     assert_eq!(t::download_level(&ctx, &b, &b.s, 0).unwrap(), words(&g.s));
     assert_eq!(t::download_level(&ctx, &b, &b.m, 0).unwrap(), words(&g.m));
 }
@@ -214,11 +165,7 @@ fn nms_matches_cpu() {
         }
         t::run(&ctx, &pass, &b).unwrap();
         for (l, em) in cpu.iter().enumerate() {
-            assert_eq!(
-                t::download_level(&ctx, &b, &b.nms, l).unwrap(),
-                words(&em.nms),
-                "{name} level {l}"
-            );
+            assert_eq!(t::download_level(&ctx, &b, &b.nms, l).unwrap(), words(&em.nms), "{name} level {l}");
         }
     }
 }
@@ -230,23 +177,9 @@ fn nms_matches_cpu() {
 fn nms_sector_boundaries_and_ties() {
     let Some(ctx) = t::context() else { return };
     let pass = NmsPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 1,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, ..Config::default() };
     let (w, h) = (45u32, 35u32);
-    let pairs = [
-        (1000, 414),
-        (1000, 415),
-        (415, 1000),
-        (414, 1000),
-        (5, 5),
-        (0, 0),
-        (0, 7),
-        (7, 0),
-        (510, 0),
-        (1, 1),
-    ];
+    let pairs = [(1000, 414), (1000, 415), (415, 1000), (414, 1000), (5, 5), (0, 0), (0, 7), (7, 0), (510, 0), (1, 1)];
     let mut r = Rng(11);
     let mut gx = Vec::new();
     let mut gy = Vec::new();
@@ -269,10 +202,7 @@ fn nms_sector_boundaries_and_ties() {
     t::run(&ctx, &pass, &b).unwrap();
     let want = cpu::nms::nms(&g);
     assert!(want.data.contains(&1));
-    assert_eq!(
-        t::download_level(&ctx, &b, &b.nms, 0).unwrap(),
-        words(&want)
-    );
+    assert_eq!(t::download_level(&ctx, &b, &b.nms, 0).unwrap(), words(&want));
 }
 
 #[test]
@@ -288,19 +218,11 @@ fn histogram_matches_cpu() {
         t::run(&ctx, &pass, &b).unwrap();
         let hist = t::download(&ctx, &b.hist).unwrap();
         for (l, em) in cpu.iter().enumerate() {
-            assert_eq!(
-                &hist[l * 256..][..256],
-                &em.histogram[..],
-                "{name} level {l}"
-            );
+            assert_eq!(&hist[l * 256..][..256], &em.histogram[..], "{name} level {l}");
         }
         // Running twice gives the same bins (cleared, not accumulated).
         t::run(&ctx, &pass, &b).unwrap();
-        assert_eq!(
-            t::download(&ctx, &b.hist).unwrap(),
-            hist,
-            "{name} second run"
-        );
+        assert_eq!(t::download(&ctx, &b.hist).unwrap(), hist, "{name} second run");
     }
 }
 
@@ -310,25 +232,11 @@ fn histogram_matches_cpu() {
 fn histogram_clips_and_counts_runs() {
     let Some(ctx) = t::context() else { return };
     let pass = HistogramPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 1,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, ..Config::default() };
     let (w, h) = (45u32, 38u32);
-    let m = Plane::<u16>::from_vec(
-        w,
-        h,
-        (0..w * h)
-            .map(|i| {
-                if i % 7 == 0 {
-                    255 + (i % 106) as u16
-                } else {
-                    3
-                }
-            })
-            .collect(),
-    )
-    .unwrap();
+    let m =
+        Plane::<u16>::from_vec(w, h, (0..w * h).map(|i| if i % 7 == 0 { 255 + (i % 106) as u16 } else { 3 }).collect())
+            .unwrap();
     let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
     t::upload_plane(&ctx, &b, &b.m, 0, &m);
     t::run(&ctx, &pass, &b).unwrap();
@@ -410,11 +318,7 @@ fn random_histogram(r: &mut Rng, kind: u64) -> [u32; 256] {
         // symmetric around 127.5: the split at k and at 254 - k tie exactly
         7 => {
             for i in 0..128 {
-                let c = if r.below(3) == 0 {
-                    0
-                } else {
-                    r.below(1 << 20) as u32
-                };
+                let c = if r.below(3) == 0 { 0 } else { r.below(1 << 20) as u32 };
                 h[i] = c;
                 h[255 - i] = c;
             }
@@ -447,10 +351,7 @@ fn random_histogram(r: &mut Rng, kind: u64) -> [u32; 256] {
 fn otsu_matches_cpu_on_random_histograms() {
     let Some(ctx) = t::context() else { return };
     let pass = OtsuPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 32,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 32, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 8, 8).unwrap();
     let mut r = Rng(0x5eed);
     let mut fixed: Vec<[u32; 256]> = Vec::new();
@@ -502,10 +403,7 @@ fn otsu_matches_cpu_on_random_histograms() {
                 got[i],
                 want,
                 "histogram {:?}",
-                h.iter()
-                    .enumerate()
-                    .filter(|(_, c)| **c > 0)
-                    .collect::<Vec<_>>()
+                h.iter().enumerate().filter(|(_, c)| **c > 0).collect::<Vec<_>>()
             );
         }
         // Levels past the chunk saw empty histograms: no edges.
@@ -542,10 +440,7 @@ fn local_threshold_matches_cpu() {
 fn local_threshold_clips_and_takes_lower_median() {
     let Some(ctx) = t::context() else { return };
     let pass = LocalThresholdPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 2,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 2, ..Config::default() };
     let (w, h) = (170u32, 90u32);
     let mut r = Rng(77);
     let m0 = Plane::<u16>::from_vec(
@@ -563,27 +458,14 @@ fn local_threshold_clips_and_takes_lower_median() {
     let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
     let mut want = Vec::new();
     for (l, &(lw, lh)) in b.layout.sizes.iter().enumerate() {
-        let m = Plane::<u16>::from_vec(
-            lw,
-            lh,
-            (0..lw * lh)
-                .map(|i| m0.data[(i * 7 % (w * h)) as usize])
-                .collect(),
-        )
-        .unwrap();
+        let m = Plane::<u16>::from_vec(lw, lh, (0..lw * lh).map(|i| m0.data[(i * 7 % (w * h)) as usize]).collect())
+            .unwrap();
         t::upload_plane(&ctx, &b, &b.m, l, &m);
         let g = cpu::local_threshold::local_threshold(&m);
-        want.extend(
-            g.stats
-                .iter()
-                .flat_map(|s| [s.min as u32, s.max as u32, s.median as u32, s.v3()]),
-        );
+        want.extend(g.stats.iter().flat_map(|s| [s.min as u32, s.max as u32, s.median as u32, s.v3()]));
     }
     t::run(&ctx, &pass, &b).unwrap();
-    assert_eq!(
-        &t::download(&ctx, &b.windows).unwrap()[..want.len()],
-        &want[..]
-    );
+    assert_eq!(&t::download(&ctx, &b.windows).unwrap()[..want.len()], &want[..]);
 }
 
 #[test]
@@ -605,11 +487,7 @@ fn classify_matches_cpu() {
         t::upload(&ctx, &b.windows, &windows);
         t::run(&ctx, &pass, &b).unwrap();
         for (l, em) in cpu.iter().enumerate() {
-            assert_eq!(
-                t::download_level(&ctx, &b, &b.classes, l).unwrap(),
-                words(&em.classes),
-                "{name} level {l}"
-            );
+            assert_eq!(t::download_level(&ctx, &b, &b.classes, l).unwrap(), words(&em.classes), "{name} level {l}");
         }
     }
 }
@@ -623,26 +501,14 @@ fn classify_boundaries() {
     let pass = ClassifyPass::new(&ctx.device);
     let (w, h) = (361u32, 4u32);
     for alpha_pct in [0, 35, 99] {
-        let cfg = Config {
-            n_levels: 1,
-            alpha_pct,
-            ..Config::default()
-        };
+        let cfg = Config { n_levels: 1, alpha_pct, ..Config::default() };
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         let m = Plane::<u16>::from_vec(w, h, (0..w * h).map(|i| (i % w) as u16).collect()).unwrap();
-        let keep =
-            Plane::<u8>::from_vec(w, h, (0..w * h).map(|i| (i % 5 != 4) as u8).collect()).unwrap();
+        let keep = Plane::<u8>::from_vec(w, h, (0..w * h).map(|i| (i % 5 != 4) as u8).collect()).unwrap();
         t::upload_plane(&ctx, &b, &b.m, 0, &m);
         t::upload_plane(&ctx, &b, &b.nms, 0, &keep);
         let n_windows = b.layout.total_windows as usize;
-        for (t1, v3) in [
-            (41u32, 100u32),
-            (31, 60),
-            (300, 765),
-            (1, 0),
-            (256, 3),
-            (0, 100),
-        ] {
+        for (t1, v3) in [(41u32, 100u32), (31, 60), (300, 765), (1, 0), (256, 3), (0, 100)] {
             // The pass reads only V3 of a window: write it directly (min, max
             // and median could not give every V3 with min = max = median).
             let win: Vec<u32> = (0..n_windows).flat_map(|_| [0, 0, 0, v3]).collect();
@@ -651,15 +517,8 @@ fn classify_boundaries() {
             t::run(&ctx, &pass, &b).unwrap();
             let got = t::download_level(&ctx, &b, &b.classes, 0).unwrap();
             for (i, (&mv, &k)) in m.data.iter().zip(&keep.data).enumerate() {
-                let want = if t1 == 0 || k == 0 {
-                    NONE
-                } else {
-                    cpu::classify::class_of(mv as u32, t1, v3, alpha_pct)
-                };
-                assert_eq!(
-                    got[i], want as u32,
-                    "M {mv} T1 {t1} V3 {v3} alpha {alpha_pct}"
-                );
+                let want = if t1 == 0 || k == 0 { NONE } else { cpu::classify::class_of(mv as u32, t1, v3, alpha_pct) };
+                assert_eq!(got[i], want as u32, "M {mv} T1 {t1} V3 {v3} alpha {alpha_pct}");
             }
             if t1 != 0 {
                 assert!(got.contains(&(STRONG as u32)));
@@ -709,10 +568,7 @@ fn run_front(ctx: &GpuContext, b: &Buffers) {
         c.record(&mut cp, &bound.5, b);
     }
     ctx.queue.submit([enc.finish()]);
-    assert!(
-        pollster::block_on(scope.pop()).is_none(),
-        "validation error"
-    );
+    assert!(pollster::block_on(scope.pop()).is_none(), "validation error");
     ctx.wait().unwrap();
 }
 
@@ -732,14 +588,9 @@ fn chained_front_matches_cpu_on_real_images() {
         ("chessboard", chess),
     ];
     for (name, img) in imgs {
-        let cfg = Config {
-            n_levels: 3,
-            ..Config::default()
-        };
+        let cfg = Config { n_levels: 3, ..Config::default() };
         let Case { b, cpu, .. } = cases_from(&ctx, cfg, &img, name.to_string());
-        for buf in [
-            &b.gx, &b.gy, &b.s, &b.m, &b.nms, &b.hist, &b.otsu, &b.windows, &b.classes,
-        ] {
+        for buf in [&b.gx, &b.gy, &b.s, &b.m, &b.nms, &b.hist, &b.otsu, &b.windows, &b.classes] {
             poison(&ctx, buf);
         }
         for (l, em) in cpu.iter().enumerate() {
@@ -750,19 +601,11 @@ fn chained_front_matches_cpu_on_real_images() {
         let windows = t::download(&ctx, &b.windows).unwrap();
         let mut strong = 0;
         for (l, em) in cpu.iter().enumerate() {
-            assert_eq!(
-                t::download_level(&ctx, &b, &b.nms, l).unwrap(),
-                words(&em.nms),
-                "{name} level {l}: nms"
-            );
+            assert_eq!(t::download_level(&ctx, &b, &b.nms, l).unwrap(), words(&em.nms), "{name} level {l}: nms");
             assert_eq!(otsu[l], t1_word(em), "{name} level {l}: T1");
             let o = b.layout.window_offsets[l] as usize * 4;
             let want = window_words(em);
-            assert_eq!(
-                &windows[o..o + want.len()],
-                &want[..],
-                "{name} level {l}: windows"
-            );
+            assert_eq!(&windows[o..o + want.len()], &want[..], "{name} level {l}: windows");
             let classes = t::download_level(&ctx, &b, &b.classes, l).unwrap();
             assert_eq!(classes, words(&em.classes), "{name} level {l}: classes");
             strong += classes.iter().filter(|&&c| c == STRONG as u32).count();
@@ -774,13 +617,7 @@ fn chained_front_matches_cpu_on_real_images() {
 #[test]
 fn the_case_configs_are_valid() {
     for &(w, h, levels, _, alpha_pct) in CASES {
-        Config {
-            n_levels: levels,
-            alpha_pct,
-            ..Config::default()
-        }
-        .validate()
-        .unwrap();
+        Config { n_levels: levels, alpha_pct, ..Config::default() }.validate().unwrap();
         assert!(w * h <= 200 * 150);
     }
 }

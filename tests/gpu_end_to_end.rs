@@ -9,16 +9,17 @@ mod common;
 use lfast::config::{Config, Mode};
 use lfast::cpu::CpuDetector;
 use lfast::gpu::detector::{Frame, GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
-use lfast::testing as t;
 use lfast::image::load_gray;
+use lfast::testing as t;
 use lfast::wgpu;
 use lfast::{KeyPoint, Plane};
 
 fn golden_images() -> Vec<(String, Plane<u8>)> {
-    let mut v: Vec<(String, Plane<u8>)> = ["astronaut_256.png", "camera_cc0_v0.18plus.png", "chessboard_GRAY.png", "coins.png", "text.png"]
-        .iter()
-        .map(|n| (n.to_string(), load_gray(common::data(n)).unwrap()))
-        .collect();
+    let mut v: Vec<(String, Plane<u8>)> =
+        ["astronaut_256.png", "camera_cc0_v0.18plus.png", "chessboard_GRAY.png", "coins.png", "text.png"]
+            .iter()
+            .map(|n| (n.to_string(), load_gray(common::data(n)).unwrap()))
+            .collect();
     if let Some(p) = common::shared("kitti/seq01_000000-000050/image_0/000020.png") {
         v.push(("kitti 000020".into(), load_gray(p).unwrap()));
     }
@@ -40,7 +41,10 @@ fn assert_same(what: &str, gpu: &Frame, cpu: &(Vec<KeyPoint>, Vec<[u8; 32]>)) {
 /// are not equal: where a GPU/CPU rounding difference could swap the order.
 fn near_ties(kps: &[KeyPoint]) -> usize {
     kps.windows(2)
-        .filter(|w| w[0].response != w[1].response && (w[0].response.to_bits() as i64 - w[1].response.to_bits() as i64).abs() <= 1)
+        .filter(|w| {
+            w[0].response != w[1].response
+                && (w[0].response.to_bits() as i64 - w[1].response.to_bits() as i64).abs() <= 1
+        })
         .count()
 }
 
@@ -57,7 +61,11 @@ fn keypoints_and_descriptors_equal_the_cpu_on_the_golden_images() {
             let c = cpu.detect_and_compute(img.view(), None).unwrap();
             assert_same(&format!("{name} {mode:?}"), &g, &c);
             assert!(!g.keypoints.is_empty() || name.contains("chess"), "{name}: no keypoints at all");
-            eprintln!("{name} {mode:?}: {} keypoints, identical; near-ties within 1 ulp: {}", g.keypoints.len(), near_ties(&c.0));
+            eprintln!(
+                "{name} {mode:?}: {} keypoints, identical; near-ties within 1 ulp: {}",
+                g.keypoints.len(),
+                near_ties(&c.0)
+            );
         }
     }
 }
@@ -76,7 +84,11 @@ fn edge_maps_and_candidates_equal_the_cpu_on_every_level() {
         for (l, lv) in levels.iter().enumerate() {
             let em = lfast::cpu::edge_map(lv, &cfg);
             let e: Vec<u32> = em.edges.data.iter().map(|&v| v as u32).collect();
-            assert_eq!(t::download_level(&ctx, &w.buffers, &w.buffers.edges, l).unwrap(), e, "{name}: edges of level {l}");
+            assert_eq!(
+                t::download_level(&ctx, &w.buffers, &w.buffers.edges, l).unwrap(),
+                e,
+                "{name}: edges of level {l}"
+            );
             let cands = lfast::cpu::lfast::lfast(&em.edges, None, &params);
             let got = t::download_level(&ctx, &w.buffers, &w.buffers.cand, l).unwrap();
             let (lw, _) = cfg.level_sizes(img.width, img.height)[l];
@@ -97,7 +109,9 @@ fn random_images_across_workgroup_boundaries() {
     let cpu = CpuDetector::new(cfg).unwrap();
     let mut ws = None;
     // the same workspace through growing and shrinking sizes
-    for (i, (w, h)) in [(100, 77), (257, 129), (33, 33), (160, 90), (16, 16), (1, 1), (300, 17), (129, 257)].into_iter().enumerate() {
+    for (i, (w, h)) in
+        [(100, 77), (257, 129), (33, 33), (160, 90), (16, 16), (1, 1), (300, 17), (129, 257)].into_iter().enumerate()
+    {
         let img = t::test_image(w, h, 100 + i as u32);
         let g = gpu.detect_and_compute(&mut ws, img.view(), None).unwrap();
         let c = cpu.detect_and_compute(img.view(), None).unwrap();
@@ -171,7 +185,12 @@ fn texture_input_equals_gray_input() {
 fn frames_in_flight_through_the_ring() {
     let Some(ctx) = t::context() else { return };
     let cfg = Config::default();
-    let gpu = GpuDetector::with_options(ctx.clone(), cfg.clone(), GpuDetectorOptions { ring: 3, profile: true, ..Default::default() }).unwrap();
+    let gpu = GpuDetector::with_options(
+        ctx.clone(),
+        cfg.clone(),
+        GpuDetectorOptions { ring: 3, profile: true, ..Default::default() },
+    )
+    .unwrap();
     let cpu = CpuDetector::new(cfg).unwrap();
     let frames: Vec<Plane<u8>> = (0..5).map(|i| t::test_image(200, 120, 7 + i)).collect();
     let mut ws = gpu.workspace(200, 120).unwrap();

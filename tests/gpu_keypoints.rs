@@ -10,25 +10,15 @@ use lfast::gpu::corner_nms::CornerNmsPass;
 use lfast::gpu::response::ResponsePass;
 use lfast::gpu::select::SelectPass;
 use lfast::gpu::{Buffers, GpuContext, GpuKeypoint, Pass};
-use lfast::testing as t;
 use lfast::image::load_gray;
+use lfast::testing as t;
 use lfast::{Error, Plane};
 
-const IMAGES: [&str; 5] = [
-    "astronaut_256.png",
-    "camera_cc0_v0.18plus.png",
-    "chessboard_GRAY.png",
-    "coins.png",
-    "text.png",
-];
+const IMAGES: [&str; 5] =
+    ["astronaut_256.png", "camera_cc0_v0.18plus.png", "chessboard_GRAY.png", "coins.png", "text.png"];
 
 fn data(name: &str) -> Plane<u8> {
-    load_gray(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/data")
-            .join(name),
-    )
-    .unwrap()
+    load_gray(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)).unwrap()
 }
 
 /// xorshift32: deterministic test data without a dependency.
@@ -69,11 +59,7 @@ fn cpu_levels(cfg: &Config, img: &Plane<u8>) -> Vec<CpuLevel> {
             let em = edge_map(p, cfg);
             let cands = lfast(&em.edges, None, &params);
             let resp = response::responses(&em.denoised, &cands);
-            CpuLevel {
-                denoised: em.denoised,
-                cands,
-                resp,
-            }
+            CpuLevel { denoised: em.denoised, cands, resp }
         })
         .collect()
 }
@@ -81,11 +67,7 @@ fn cpu_levels(cfg: &Config, img: &Plane<u8>) -> Vec<CpuLevel> {
 /// Corners appended by corner NMS: the counter and the list.
 fn download_corners(ctx: &GpuContext, b: &Buffers) -> Vec<GpuKeypoint> {
     let n = t::download(ctx, &b.counters).unwrap()[counter::CORNERS] as usize;
-    assert!(
-        n <= b.layout.capacity as usize,
-        "{n} corners > capacity {}",
-        b.layout.capacity
-    );
+    assert!(n <= b.layout.capacity as usize, "{n} corners > capacity {}", b.layout.capacity);
     let words = t::download(ctx, &b.corners).unwrap();
     bytemuck::cast_slice::<u32, GpuKeypoint>(&words[..n * 12]).to_vec()
 }
@@ -96,16 +78,8 @@ fn download_keypoints(ctx: &GpuContext, b: &Buffers, n_corners: usize) -> Vec<Gp
     let n = counters[counter::KEYPOINTS] as usize;
     let ind = t::download(ctx, &b.indirect).unwrap();
     let at = |o: u64| &ind[(o / 4) as usize..(o / 4) as usize + 4];
-    assert_eq!(
-        at(indirect::CORNERS)[..3],
-        [n_corners.div_ceil(64) as u32, 1, 1],
-        "corner dispatch args"
-    );
-    assert_eq!(
-        at(indirect::KEYPOINTS)[..3],
-        [n.div_ceil(64) as u32, 1, 1],
-        "keypoint dispatch args"
-    );
+    assert_eq!(at(indirect::CORNERS)[..3], [n_corners.div_ceil(64) as u32, 1, 1], "corner dispatch args");
+    assert_eq!(at(indirect::KEYPOINTS)[..3], [n.div_ceil(64) as u32, 1, 1], "keypoint dispatch args");
     assert_eq!(at(indirect::DRAW), [4, n as u32, 0, 0], "draw args");
     assert_eq!(
         at(indirect::KEYPOINT_GROUPS)[..3],
@@ -141,20 +115,8 @@ fn harris_constants_are_the_cpus() {
     let scale = 1.0f32 / ((1 << 2) as f32 * response::BLOCK as f32 * 255.0);
     let scale_sq_sq = scale * scale * scale * scale;
     let src = lfast::gpu::response::SOURCE;
-    assert!(
-        src.contains(&format!(
-            "SCALE_SQ_SQ_BITS: u32 = {:#010x}u;",
-            scale_sq_sq.to_bits()
-        )),
-        "scale^4"
-    );
-    assert!(
-        src.contains(&format!(
-            "HARRIS_K_BITS: u32 = {:#010x}u;",
-            response::HARRIS_K.to_bits()
-        )),
-        "k"
-    );
+    assert!(src.contains(&format!("SCALE_SQ_SQ_BITS: u32 = {:#010x}u;", scale_sq_sq.to_bits())), "scale^4");
+    assert!(src.contains(&format!("HARRIS_K_BITS: u32 = {:#010x}u;", response::HARRIS_K.to_bits())), "k");
 }
 
 #[test]
@@ -164,21 +126,12 @@ fn response_matches_cpu_on_real_candidates() {
     let mut checked = 0;
     for name in IMAGES {
         let img = data(name);
-        let cfg = Config {
-            n_levels: 4,
-            ..Config::default()
-        };
+        let cfg = Config { n_levels: 4, ..Config::default() };
         let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
         let levels = cpu_levels(&cfg, &img);
         for (l, lv) in levels.iter().enumerate() {
             t::upload_plane(&ctx, &b, &b.denoised, l, &lv.denoised);
-            t::upload_level(
-                &ctx,
-                &b,
-                &b.cand,
-                l,
-                &cand_map(lv.denoised.width, lv.denoised.height, &lv.cands),
-            );
+            t::upload_level(&ctx, &b, &b.cand, l, &cand_map(lv.denoised.width, lv.denoised.height, &lv.cands));
         }
         t::run(&ctx, &pass, &b).unwrap();
         for (l, lv) in levels.iter().enumerate() {
@@ -189,13 +142,7 @@ fn response_matches_cpu_on_real_candidates() {
             }
             let got = t::download_level(&ctx, &b, &b.resp, l).unwrap();
             for (i, (g, w_)) in got.iter().zip(&want).enumerate() {
-                assert_eq!(
-                    g,
-                    w_,
-                    "{name} level {l} pixel {i}: {} vs {}",
-                    f32::from_bits(*g),
-                    f32::from_bits(*w_)
-                );
+                assert_eq!(g, w_, "{name} level {l} pixel {i}: {} vs {}", f32::from_bits(*g), f32::from_bits(*w_));
             }
             checked += lv.cands.len();
         }
@@ -212,14 +159,7 @@ fn response_matches_cpu_at_every_pixel() {
     let pass = ResponsePass::new(&ctx.device);
     let noise = |w: u32, h: u32, seed: u32| {
         let mut r = Rng(seed);
-        Plane::from_vec(
-            w,
-            h,
-            (0..w * h)
-                .map(|_| if r.below(2) == 0 { 0 } else { 255 })
-                .collect(),
-        )
-        .unwrap()
+        Plane::from_vec(w, h, (0..w * h).map(|_| if r.below(2) == 0 { 0 } else { 255 }).collect()).unwrap()
     };
     let mut cases: Vec<(Plane<u8>, u32)> = vec![
         (t::test_image(37, 29, 1), 3),
@@ -232,10 +172,7 @@ fn response_matches_cpu_at_every_pixel() {
     cases.push((data("chessboard_GRAY.png"), 3));
     let mut values = std::collections::HashSet::new();
     for (img, levels) in &cases {
-        let cfg = Config {
-            n_levels: *levels,
-            ..Config::default()
-        };
+        let cfg = Config { n_levels: *levels, ..Config::default() };
         let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
         let lv = t::cpu_levels(&cfg, img);
         for (l, p) in lv.iter().enumerate() {
@@ -262,11 +199,7 @@ fn response_matches_cpu_at_every_pixel() {
             }
         }
     }
-    assert!(
-        values.len() > 10_000,
-        "only {} distinct responses",
-        values.len()
-    );
+    assert!(values.len() > 10_000, "only {} distinct responses", values.len());
 }
 
 #[test]
@@ -276,11 +209,7 @@ fn corner_nms_matches_cpu_on_real_images() {
     for name in IMAGES {
         let img = data(name);
         for r in [0, 1, 3] {
-            let cfg = Config {
-                n_levels: 4,
-                nms_radius: r,
-                ..Config::default()
-            };
+            let cfg = Config { n_levels: 4, nms_radius: r, ..Config::default() };
             let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
             let levels = cpu_levels(&cfg, &img);
             let mut want = Vec::new();
@@ -293,12 +222,7 @@ fn corner_nms_matches_cpu_on_real_images() {
                 }
                 t::upload_level(&ctx, &b, &b.resp, l, &resp);
                 for i in corner_nms::corner_nms(w, h, &lv.cands, &lv.resp, r) {
-                    let c = Corner {
-                        level: l as u32,
-                        x: lv.cands[i][0],
-                        y: lv.cands[i][1],
-                        response: lv.resp[i],
-                    };
+                    let c = Corner { level: l as u32, x: lv.cands[i][0], y: lv.cands[i][1], response: lv.resp[i] };
                     want.push(bits(&corner_kp(&cfg, &c)));
                 }
             }
@@ -322,20 +246,9 @@ fn corner_nms_breaks_ties_by_position() {
     let Some(ctx) = t::context() else { return };
     let pass = CornerNmsPass::new(&ctx.device);
     let pool = [1.0f32, 2.0, -1.0, 0.0, -0.0, 2.0];
-    for (w, h, levels, seed) in [
-        (40, 40, 1, 1),
-        (48, 40, 3, 2),
-        (37, 29, 2, 3),
-        (17, 1, 1, 4),
-        (1, 1, 1, 5),
-    ] {
+    for (w, h, levels, seed) in [(40, 40, 1, 1), (48, 40, 3, 2), (37, 29, 2, 3), (17, 1, 1, 4), (1, 1, 1, 5)] {
         for r in [0, 1, 2, 4] {
-            let cfg = Config {
-                n_levels: levels,
-                nms_radius: r,
-                border: 7,
-                ..Config::default()
-            };
+            let cfg = Config { n_levels: levels, nms_radius: r, border: 7, ..Config::default() };
             let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
             let mut rng = Rng(seed * 1000 + r + 1);
             let mut want = Vec::new();
@@ -357,12 +270,7 @@ fn corner_nms_breaks_ties_by_position() {
                 t::upload_level(&ctx, &b, &b.cand, l, &cand_map(lw, lh, &cands));
                 t::upload_level(&ctx, &b, &b.resp, l, &rmap);
                 for i in corner_nms::corner_nms(lw, lh, &cands, &resp, r) {
-                    let c = Corner {
-                        level: l as u32,
-                        x: cands[i][0],
-                        y: cands[i][1],
-                        response: resp[i],
-                    };
+                    let c = Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] };
                     want.push(bits(&corner_kp(&cfg, &c)));
                 }
             }
@@ -379,12 +287,7 @@ fn corner_nms_breaks_ties_by_position() {
 fn corner_nms_literal() {
     let Some(ctx) = t::context() else { return };
     let pass = CornerNmsPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 1,
-        nms_radius: 1,
-        border: 7,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, nms_radius: 1, border: 7, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 20, 20).unwrap();
     // a tied 2x2 group keeps its first in (y, x) order; (9, 9) beats nothing
     // at distance 2 from (7, 7); (12, 12) loses to (13, 13)
@@ -406,20 +309,11 @@ fn corner_nms_literal() {
     t::upload_level(&ctx, &b, &b.cand, 0, &cand);
     t::upload_level(&ctx, &b, &b.resp, 0, &resp);
     t::run(&ctx, &pass, &b).unwrap();
-    let mut got: Vec<(u32, u32)> = download_corners(&ctx, &b)
-        .iter()
-        .map(|k| (k.px, k.py))
-        .collect();
+    let mut got: Vec<(u32, u32)> = download_corners(&ctx, &b).iter().map(|k| (k.px, k.py)).collect();
     got.sort();
     assert_eq!(got, vec![(5, 5), (9, 9), (13, 13)]);
-    let k = download_corners(&ctx, &b)
-        .into_iter()
-        .find(|k| k.px == 9)
-        .unwrap();
-    assert_eq!(
-        (k.x, k.y, k.size, k.angle, k.response, k.level),
-        (9.5, 9.5, 31.0, 0.0, 0.5, 0)
-    );
+    let k = download_corners(&ctx, &b).into_iter().find(|k| k.px == 9).unwrap();
+    assert_eq!((k.x, k.y, k.size, k.angle, k.response, k.level), (9.5, 9.5, 31.0, 0.0, 0.5, 0));
 }
 
 /// Random corners of every level of `cfg` at `w x h`: unique positions,
@@ -427,17 +321,7 @@ fn corner_nms_literal() {
 fn random_corners(cfg: &Config, w: u32, h: u32, n: usize, seed: u32) -> Vec<Corner> {
     let mut rng = Rng(seed);
     let sizes = cfg.level_sizes(w, h);
-    let pool = [
-        0.0f32,
-        -0.0,
-        1.0,
-        -1.0,
-        2.5e-7,
-        -3.0e-9,
-        1.0e-3,
-        f32::MIN_POSITIVE,
-        -f32::MIN_POSITIVE,
-    ];
+    let pool = [0.0f32, -0.0, 1.0, -1.0, 2.5e-7, -3.0e-9, 1.0e-3, f32::MIN_POSITIVE, -f32::MIN_POSITIVE];
     let mut seen = std::collections::HashSet::new();
     let mut out = Vec::new();
     // some levels get nothing: skew the level choice toward the first ones
@@ -454,12 +338,7 @@ fn random_corners(cfg: &Config, w: u32, h: u32, n: usize, seed: u32) -> Vec<Corn
             1 => (rng.below(2000) as f32 - 1000.0) * 1.0e-6,
             _ => f32::from_bits(rng.next() & 0xbfff_ffff), // finite, any sign and scale
         };
-        out.push(Corner {
-            level: l,
-            x,
-            y,
-            response,
-        });
+        out.push(Corner { level: l, x, y, response });
     }
     out
 }
@@ -467,20 +346,9 @@ fn random_corners(cfg: &Config, w: u32, h: u32, n: usize, seed: u32) -> Vec<Corn
 /// Uploads `corners` as the unordered list (with distinct payloads in the
 /// fields select only copies) and the count, runs select, and checks the
 /// result against `cpu::select::select`.
-fn check_select(
-    ctx: &GpuContext,
-    pass: &SelectPass,
-    cfg: &Config,
-    w: u32,
-    h: u32,
-    corners: &[Corner],
-    what: &str,
-) {
+fn check_select(ctx: &GpuContext, pass: &SelectPass, cfg: &Config, w: u32, h: u32, corners: &[Corner], what: &str) {
     let b = Buffers::new(&ctx.device, cfg, w, h).unwrap();
-    assert!(
-        corners.len() <= b.layout.capacity as usize,
-        "{what}: test needs capacity"
-    );
+    assert!(corners.len() <= b.layout.capacity as usize, "{what}: test needs capacity");
     let kp = |c: &Corner| GpuKeypoint {
         angle: c.x as f32 * 0.25,
         m10: c.y as i32 - 1000,
@@ -491,8 +359,7 @@ fn check_select(
     };
     let list: Vec<GpuKeypoint> = corners.iter().map(kp).collect();
     if !list.is_empty() {
-        ctx.queue
-            .write_buffer(&b.corners, 0, bytemuck::cast_slice(&list));
+        ctx.queue.write_buffer(&b.corners, 0, bytemuck::cast_slice(&list));
     }
     // KEYPOINTS and TAKEN hold junk from an earlier frame
     t::upload(ctx, &b.counters, &[corners.len() as u32, 12345, 999, 0]);
@@ -503,14 +370,8 @@ fn check_select(
     for c in corners {
         per_level[c.level as usize].push(*c);
     }
-    let want: Vec<[u32; 12]> = select(per_level, &sizes, cfg.n_features, false)
-        .iter()
-        .map(|c| bits(&kp(c)))
-        .collect();
-    let got: Vec<[u32; 12]> = download_keypoints(ctx, &b, corners.len())
-        .iter()
-        .map(bits)
-        .collect();
+    let want: Vec<[u32; 12]> = select(per_level, &sizes, cfg.n_features, false).iter().map(|c| bits(&kp(c))).collect();
+    let got: Vec<[u32; 12]> = download_keypoints(ctx, &b, corners.len()).iter().map(bits).collect();
     assert_eq!(got.len(), want.len(), "{what}: count");
     for (i, (g, w_)) in got.iter().zip(&want).enumerate() {
         assert_eq!(g, w_, "{what}: keypoint {i}");
@@ -522,34 +383,13 @@ fn select_matches_cpu_on_random_corners() {
     let Some(ctx) = t::context() else { return };
     let pass = SelectPass::new(&ctx.device);
     // nms_radius 0 and border 7: a capacity far above the corner counts
-    for (n, levels, seed) in [
-        (0, 3, 1),
-        (1, 1, 2),
-        (5, 2, 3),
-        (63, 4, 4),
-        (64, 3, 5),
-        (65, 8, 6),
-        (700, 5, 7),
-        (2500, 6, 8),
-    ] {
+    for (n, levels, seed) in
+        [(0, 3, 1), (1, 1, 2), (5, 2, 3), (63, 4, 4), (64, 3, 5), (65, 8, 6), (700, 5, 7), (2500, 6, 8)]
+    {
         for cap in [0, 1, 3, 10, 64, 100, 1000, 5000] {
-            let cfg = Config {
-                n_levels: levels,
-                nms_radius: 0,
-                border: 7,
-                n_features: cap,
-                ..Config::default()
-            };
+            let cfg = Config { n_levels: levels, nms_radius: 0, border: 7, n_features: cap, ..Config::default() };
             let corners = random_corners(&cfg, 200, 150, n, seed * 31 + cap);
-            check_select(
-                &ctx,
-                &pass,
-                &cfg,
-                200,
-                150,
-                &corners,
-                &format!("{n} corners, {levels} levels, cap {cap}"),
-            );
+            check_select(&ctx, &pass, &cfg, 200, 150, &corners, &format!("{n} corners, {levels} levels, cap {cap}"));
         }
     }
 }
@@ -558,12 +398,7 @@ fn select_matches_cpu_on_random_corners() {
 fn select_orders_signed_zeros_and_ties() {
     let Some(ctx) = t::context() else { return };
     let pass = SelectPass::new(&ctx.device);
-    let c = |level, x, y, response| Corner {
-        level,
-        x,
-        y,
-        response,
-    };
+    let c = |level, x, y, response| Corner { level, x, y, response };
     let corners = vec![
         c(0, 30, 20, -0.0),
         c(0, 20, 20, 0.0),
@@ -576,12 +411,7 @@ fn select_orders_signed_zeros_and_ties() {
         c(1, 6, 5, -f32::from_bits(1)),
     ];
     for cap in [0, 1, 2, 5, 9, 20] {
-        let cfg = Config {
-            n_levels: 2,
-            border: 7,
-            n_features: cap,
-            ..Config::default()
-        };
+        let cfg = Config { n_levels: 2, border: 7, n_features: cap, ..Config::default() };
         check_select(&ctx, &pass, &cfg, 64, 48, &corners, &format!("cap {cap}"));
     }
     // the order itself, spelled out (cap 0)
@@ -609,20 +439,8 @@ fn select_handles_an_empty_list() {
     let Some(ctx) = t::context() else { return };
     let pass = SelectPass::new(&ctx.device);
     for cap in [0, 10] {
-        let cfg = Config {
-            n_levels: 3,
-            n_features: cap,
-            ..Config::default()
-        };
-        check_select(
-            &ctx,
-            &pass,
-            &cfg,
-            100,
-            80,
-            &[],
-            &format!("empty, cap {cap}"),
-        );
+        let cfg = Config { n_levels: 3, n_features: cap, ..Config::default() };
+        check_select(&ctx, &pass, &cfg, 100, 80, &[], &format!("empty, cap {cap}"));
     }
 }
 
@@ -631,19 +449,12 @@ fn select_handles_an_empty_list() {
 #[test]
 fn response_nms_select_chain_matches_cpu() {
     let Some(ctx) = t::context() else { return };
-    let (resp, nms, sel) = (
-        ResponsePass::new(&ctx.device),
-        CornerNmsPass::new(&ctx.device),
-        SelectPass::new(&ctx.device),
-    );
+    let (resp, nms, sel) =
+        (ResponsePass::new(&ctx.device), CornerNmsPass::new(&ctx.device), SelectPass::new(&ctx.device));
     for name in ["coins.png", "text.png", "astronaut_256.png"] {
         let img = data(name);
         for cap in [0, 50, 500] {
-            let cfg = Config {
-                n_levels: 5,
-                n_features: cap,
-                ..Config::default()
-            };
+            let cfg = Config { n_levels: 5, n_features: cap, ..Config::default() };
             let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
             let levels = cpu_levels(&cfg, &img);
             let mut per_level = Vec::new();
@@ -664,18 +475,13 @@ fn response_nms_select_chain_matches_cpu() {
                 );
             }
             let n_corners = per_level.iter().map(Vec::len).sum::<usize>();
-            let want: Vec<[u32; 12]> = select(per_level, &b.layout.sizes, cap, false)
-                .iter()
-                .map(|c| bits(&corner_kp(&cfg, c)))
-                .collect();
+            let want: Vec<[u32; 12]> =
+                select(per_level, &b.layout.sizes, cap, false).iter().map(|c| bits(&corner_kp(&cfg, c))).collect();
             let run = |r: Result<(), Error>| r.unwrap_or_else(|e| panic!("{name}: {e}"));
             run(t::run(&ctx, &resp, &b));
             run(t::run(&ctx, &nms, &b));
             run(t::run(&ctx, &sel, &b));
-            let got: Vec<[u32; 12]> = download_keypoints(&ctx, &b, n_corners)
-                .iter()
-                .map(bits)
-                .collect();
+            let got: Vec<[u32; 12]> = download_keypoints(&ctx, &b, n_corners).iter().map(bits).collect();
             assert_eq!(got, want, "{name} cap {cap}");
             assert!(!want.is_empty());
         }

@@ -11,8 +11,8 @@ use lfast::gpu::orb::OrbPass;
 use lfast::gpu::orientation::OrientationPass;
 use lfast::gpu::pyramid::PyramidPass;
 use lfast::gpu::{Buffers, GpuContext, GpuKeypoint, Pass};
-use lfast::testing as t;
 use lfast::image::luma_bt601;
+use lfast::testing as t;
 use lfast::{Config, Descriptor, Error, Plane, hamming};
 
 /// xorshift bytes.
@@ -29,25 +29,14 @@ fn random_bytes(n: usize, seed: u32) -> Vec<u8> {
 }
 
 fn level0(ctx: &GpuContext, b: &Buffers) -> Vec<u8> {
-    t::download_level(ctx, b, &b.gray, 0)
-        .unwrap()
-        .iter()
-        .map(|&v| u8::try_from(v).unwrap())
-        .collect()
+    t::download_level(ctx, b, &b.gray, 0).unwrap().iter().map(|&v| u8::try_from(v).unwrap()).collect()
 }
 
 #[test]
 fn luma_from_bytes() {
     let Some(ctx) = t::context() else { return };
     let pass = LumaPass::new(&ctx.device);
-    for (w, h, seed) in [
-        (37, 29, 1),
-        (130, 75, 2),
-        (17, 1, 3),
-        (1, 1, 4),
-        (5, 3, 5),
-        (16, 16, 6),
-    ] {
+    for (w, h, seed) in [(37, 29, 1), (130, 75, 2), (17, 1, 3), (1, 1, 4), (5, 3, 5), (16, 16, 6)] {
         let b = Buffers::new(&ctx.device, &Config::default(), w, h).unwrap();
         let img = random_bytes((w * h) as usize, seed);
         // the host writes the bytes as they are; the buffer is padded to whole words
@@ -67,11 +56,7 @@ fn texture(
     texels: &[u8],
     usage: wgpu::TextureUsages,
 ) -> wgpu::Texture {
-    let size = wgpu::Extent3d {
-        width: w,
-        height: h,
-        depth_or_array_layers: 1,
-    };
+    let size = wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 };
     let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("luma test input"),
         size,
@@ -87,11 +72,7 @@ fn texture(
         ctx.queue.write_texture(
             tex.as_image_copy(),
             texels,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(bpp * w),
-                rows_per_image: Some(h),
-            },
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(bpp * w), rows_per_image: Some(h) },
             size,
         );
     }
@@ -109,17 +90,13 @@ fn run_texture(
     let bound = pass.bind_texture(&ctx.device, b, view, format)?;
     let mut enc = ctx.device.create_command_encoder(&Default::default());
     {
-        let mut cp = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("luma texture"),
-            timestamp_writes: None,
-        });
+        let mut cp = enc
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("luma texture"), timestamp_writes: None });
         pass.record_texture(&mut cp, &bound, b);
     }
     ctx.queue.submit([enc.finish()]);
     if let Some(e) = pollster::block_on(scope.pop()) {
-        return Err(Error::Gpu {
-            reason: format!("luma texture: {e}"),
-        });
+        return Err(Error::Gpu { reason: format!("luma texture: {e}") });
     }
     ctx.wait()
 }
@@ -138,30 +115,15 @@ fn luma_from_textures() {
             let mut texels = random_bytes(n * channels, seed * 7 + channels as u32);
             if channels == 4 && n >= 4 {
                 // the extremes: black, white, pure red, pure blue (alpha varies)
-                texels[..16].copy_from_slice(&[
-                    0, 0, 0, 0, 255, 255, 255, 7, 255, 0, 0, 255, 0, 0, 255, 128,
-                ]);
+                texels[..16].copy_from_slice(&[0, 0, 0, 0, 255, 255, 255, 7, 255, 0, 0, 255, 0, 0, 255, 128]);
             }
             let want: Vec<u8> = match format {
-                F::Rgba8Unorm => texels
-                    .chunks(4)
-                    .map(|p| luma_bt601(p[0], p[1], p[2]))
-                    .collect(),
-                F::Bgra8Unorm => texels
-                    .chunks(4)
-                    .map(|p| luma_bt601(p[2], p[1], p[0]))
-                    .collect(),
+                F::Rgba8Unorm => texels.chunks(4).map(|p| luma_bt601(p[0], p[1], p[2])).collect(),
+                F::Bgra8Unorm => texels.chunks(4).map(|p| luma_bt601(p[2], p[1], p[0])).collect(),
                 _ => texels.clone(),
             };
             let tex = texture(&ctx, format, w, h, &texels, usage);
-            run_texture(
-                &ctx,
-                &pass,
-                &b,
-                &tex.create_view(&Default::default()),
-                format,
-            )
-            .unwrap();
+            run_texture(&ctx, &pass, &b, &tex.create_view(&Default::default()), format).unwrap();
             assert_eq!(level0(&ctx, &b), want, "{w}x{h} {format:?}");
         }
     }
@@ -177,24 +139,11 @@ fn luma_from_textures() {
         let texels: Vec<u8> = (0..=255u8).flat_map(texel).collect();
         let want: Vec<u8> = match format {
             F::R8Unorm => (0..=255u8).collect(),
-            F::Bgra8Unorm => texels
-                .chunks(4)
-                .map(|p| luma_bt601(p[2], p[1], p[0]))
-                .collect(),
-            _ => texels
-                .chunks(4)
-                .map(|p| luma_bt601(p[0], p[1], p[2]))
-                .collect(),
+            F::Bgra8Unorm => texels.chunks(4).map(|p| luma_bt601(p[2], p[1], p[0])).collect(),
+            _ => texels.chunks(4).map(|p| luma_bt601(p[0], p[1], p[2])).collect(),
         };
         let tex = texture(&ctx, format, 256, 1, &texels, usage);
-        run_texture(
-            &ctx,
-            &pass,
-            &b,
-            &tex.create_view(&Default::default()),
-            format,
-        )
-        .unwrap();
+        run_texture(&ctx, &pass, &b, &tex.create_view(&Default::default()), format).unwrap();
         assert_eq!(level0(&ctx, &b), want, "{format:?} ramp");
     }
 }
@@ -206,71 +155,27 @@ fn luma_rejects_bad_textures() {
     let pass = LumaPass::new(&ctx.device);
     let b = Buffers::new(&ctx.device, &Config::default(), 8, 4).unwrap();
     let usage = wgpu::TextureUsages::TEXTURE_BINDING;
-    for format in [
-        F::Rgba8UnormSrgb,
-        F::Bgra8UnormSrgb,
-        F::Rgba16Float,
-        F::R32Float,
-        F::Rg8Unorm,
-    ] {
+    for format in [F::Rgba8UnormSrgb, F::Bgra8UnormSrgb, F::Rgba16Float, F::R32Float, F::Rg8Unorm] {
         let tex = texture(&ctx, format, 8, 4, &[], usage);
-        let e = pass
-            .bind_texture(
-                &ctx.device,
-                &b,
-                &tex.create_view(&Default::default()),
-                format,
-            )
-            .unwrap_err();
+        let e = pass.bind_texture(&ctx.device, &b, &tex.create_view(&Default::default()), format).unwrap_err();
         assert!(matches!(e, Error::Unsupported { .. }), "{format:?}: {e}");
         assert!(e.to_string().contains(&format!("{format:?}")), "{e}");
     }
     let tex = texture(&ctx, F::Rgba8Unorm, 9, 4, &[], usage);
-    let e = pass
-        .bind_texture(
-            &ctx.device,
-            &b,
-            &tex.create_view(&Default::default()),
-            F::Rgba8Unorm,
-        )
-        .unwrap_err();
+    let e = pass.bind_texture(&ctx.device, &b, &tex.create_view(&Default::default()), F::Rgba8Unorm).unwrap_err();
     assert!(e.to_string().contains("8x4"), "{e}");
-    let tex = texture(
-        &ctx,
-        F::Rgba8Unorm,
-        8,
-        4,
-        &[],
-        wgpu::TextureUsages::COPY_DST,
-    );
-    assert!(
-        pass.bind_texture(
-            &ctx.device,
-            &b,
-            &tex.create_view(&Default::default()),
-            F::Rgba8Unorm
-        )
-        .is_err()
-    );
+    let tex = texture(&ctx, F::Rgba8Unorm, 8, 4, &[], wgpu::TextureUsages::COPY_DST);
+    assert!(pass.bind_texture(&ctx.device, &b, &tex.create_view(&Default::default()), F::Rgba8Unorm).is_err());
 }
 
 #[test]
 fn pyramid_matches_cpu() {
     let Some(ctx) = t::context() else { return };
     let pass = PyramidPass::new(&ctx.device);
-    for (w, h, levels, seed) in [
-        (37, 29, 5, 1),
-        (130, 75, 8, 2),
-        (17, 1, 4, 3),
-        (1, 1, 4, 4),
-        (3, 2, 8, 5),
-        (200, 150, 6, 6),
-        (61, 47, 7, 7),
-    ] {
-        let cfg = Config {
-            n_levels: levels,
-            ..Config::default()
-        };
+    for (w, h, levels, seed) in
+        [(37, 29, 5, 1), (130, 75, 8, 2), (17, 1, 4, 3), (1, 1, 4, 4), (3, 2, 8, 5), (200, 150, 6, 6), (61, 47, 7, 7)]
+    {
+        let cfg = Config { n_levels: levels, ..Config::default() };
         let img = t::test_image(w, h, seed);
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         // stale data in the upper levels must not matter
@@ -295,22 +200,14 @@ fn pyramid_with_other_scale_factors() {
     let Some(ctx) = t::context() else { return };
     let pass = PyramidPass::new(&ctx.device);
     for (w, h, levels, scale) in [(97, 61, 4, 2.0), (130, 75, 5, 1.05), (45, 33, 3, 3.7)] {
-        let cfg = Config {
-            n_levels: levels,
-            scale_factor: scale,
-            ..Config::default()
-        };
+        let cfg = Config { n_levels: levels, scale_factor: scale, ..Config::default() };
         let img = t::test_image(w, h, levels);
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         t::upload_plane(&ctx, &b, &b.gray, 0, &img);
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in t::cpu_levels(&cfg, &img).iter().enumerate() {
             let want: Vec<u32> = p.data.iter().map(|&v| v as u32).collect();
-            assert_eq!(
-                t::download_level(&ctx, &b, &b.gray, l).unwrap(),
-                want,
-                "{w}x{h} scale {scale} level {l}"
-            );
+            assert_eq!(t::download_level(&ctx, &b, &b.gray, l).unwrap(), want, "{w}x{h} scale {scale} level {l}");
         }
     }
 }
@@ -319,40 +216,21 @@ fn pyramid_with_other_scale_factors() {
 fn blur_matches_cpu_on_every_level() {
     let Some(ctx) = t::context() else { return };
     let pass = BlurPass::new(&ctx.device);
-    for (w, h, levels, seed) in [
-        (37, 29, 3, 1),
-        (130, 75, 5, 2),
-        (17, 1, 2, 3),
-        (1, 1, 1, 4),
-        (2, 5, 3, 5),
-        (7, 4, 8, 6),
-    ] {
-        let cfg = Config {
-            n_levels: levels,
-            ..Config::default()
-        };
+    for (w, h, levels, seed) in
+        [(37, 29, 3, 1), (130, 75, 5, 2), (17, 1, 2, 3), (1, 1, 1, 4), (2, 5, 3, 5), (7, 4, 8, 6)]
+    {
+        let cfg = Config { n_levels: levels, ..Config::default() };
         let img = t::test_image(w, h, seed);
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         let lv = t::upload_pyramid(&ctx, &cfg, &b, &img);
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in lv.iter().enumerate() {
-            let want: Vec<u32> = blur::gaussian_blur(p, &blur::ORB_KERNEL)
-                .data
-                .iter()
-                .map(|&v| v as u32)
-                .collect();
-            assert_eq!(
-                t::download_level(&ctx, &b, &b.smooth, l).unwrap(),
-                want,
-                "{w}x{h} level {l}"
-            );
+            let want: Vec<u32> = blur::gaussian_blur(p, &blur::ORB_KERNEL).data.iter().map(|&v| v as u32).collect();
+            assert_eq!(t::download_level(&ctx, &b, &b.smooth, l).unwrap(), want, "{w}x{h} level {l}");
         }
     }
     // a hand-checked case: an impulse spreads as the outer product of the kernel
-    let cfg = Config {
-        n_levels: 1,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 9, 9).unwrap();
     let mut img = vec![0u32; 81];
     img[4 * 9 + 4] = 255;
@@ -364,11 +242,7 @@ fn blur_matches_cpu_on_every_level() {
         for x in 0..9 {
             let kx = if (1..8).contains(&x) { k[x - 1] } else { 0 };
             let ky = if (1..8).contains(&y) { k[y - 1] } else { 0 };
-            assert_eq!(
-                got[y * 9 + x],
-                (ky * kx * 255 + (1 << 15)) >> 16,
-                "({x}, {y})"
-            );
+            assert_eq!(got[y * 9 + x], (ky * kx * 255 + (1 << 15)) >> 16, "({x}, {y})");
         }
     }
 }
@@ -380,13 +254,7 @@ fn keypoints(levels: &[Plane<u8>], cap: usize, seed: u32) -> Vec<GpuKeypoint> {
     let mut kps = Vec::new();
     for (l, p) in levels.iter().enumerate() {
         let (w, h) = (p.width, p.height);
-        let mut pts = vec![
-            (0, 0),
-            (w - 1, 0),
-            (0, h - 1),
-            (w - 1, h - 1),
-            (w / 2, h / 2),
-        ];
+        let mut pts = vec![(0, 0), (w - 1, 0), (0, h - 1), (w - 1, h - 1), (w / 2, h / 2)];
         pts.extend([
             (1, h / 3),
             (w.saturating_sub(2), h / 2),
@@ -424,14 +292,8 @@ fn keypoints(levels: &[Plane<u8>], cap: usize, seed: u32) -> Vec<GpuKeypoint> {
 
 /// Writes the keypoints, `counters[KEYPOINTS]` and the indirect dispatch args.
 fn upload_keypoints(ctx: &GpuContext, b: &Buffers, kps: &[GpuKeypoint]) {
-    assert!(
-        kps.len() <= b.layout.capacity as usize,
-        "{} keypoints, capacity {}",
-        kps.len(),
-        b.layout.capacity
-    );
-    ctx.queue
-        .write_buffer(&b.keypoints, 0, bytemuck::cast_slice(kps));
+    assert!(kps.len() <= b.layout.capacity as usize, "{} keypoints, capacity {}", kps.len(), b.layout.capacity);
+    ctx.queue.write_buffer(&b.keypoints, 0, bytemuck::cast_slice(kps));
     let mut counters = [0u32; counter::LEN];
     counters[counter::KEYPOINTS] = kps.len() as u32;
     t::upload(ctx, &b.counters, &counters);
@@ -442,25 +304,22 @@ fn upload_keypoints(ctx: &GpuContext, b: &Buffers, kps: &[GpuKeypoint]) {
     );
     // as select's `finish` writes them: one workgroup per keypoint
     let n = kps.len() as u32;
-    ctx.queue.write_buffer(&b.indirect, indirect::KEYPOINT_GROUPS, bytemuck::cast_slice(&[n.min(65535), n.div_ceil(65535), 1]));
+    ctx.queue.write_buffer(
+        &b.indirect,
+        indirect::KEYPOINT_GROUPS,
+        bytemuck::cast_slice(&[n.min(65535), n.div_ceil(65535), 1]),
+    );
 }
 
 fn download_keypoints(ctx: &GpuContext, b: &Buffers) -> Vec<GpuKeypoint> {
     let words = t::download(ctx, &b.keypoints).unwrap();
-    bytemuck::cast_slice::<u32, GpuKeypoint>(
-        &words[..(b.layout.capacity as u64 * KP_WORDS) as usize],
-    )
-    .to_vec()
+    bytemuck::cast_slice::<u32, GpuKeypoint>(&words[..(b.layout.capacity as u64 * KP_WORDS) as usize]).to_vec()
 }
 
 fn download_descriptors(ctx: &GpuContext, b: &Buffers, n: usize) -> Vec<Descriptor> {
     let words = t::download(ctx, &b.descriptors).unwrap();
     let bytes: &[u8] = bytemuck::cast_slice(&words);
-    bytes
-        .chunks(32)
-        .take(n)
-        .map(|c| c.try_into().unwrap())
-        .collect()
+    bytes.chunks(32).take(n).map(|c| c.try_into().unwrap()).collect()
 }
 
 fn circular_diff(a: f32, b: f32) -> f32 {
@@ -472,40 +331,20 @@ fn circular_diff(a: f32, b: f32) -> f32 {
 fn orientation_matches_cpu() {
     let Some(ctx) = t::context() else { return };
     let pass = OrientationPass::new(&ctx.device);
-    for (w, h, levels, bins, seed) in [
-        (130, 75, 4, 30, 1),
-        (160, 120, 5, 8, 2),
-        (130, 75, 3, 0, 3),
-        (200, 150, 6, 1, 4),
-    ] {
-        let cfg = Config {
-            n_levels: levels,
-            orientation_bins: bins,
-            ..Config::default()
-        };
+    for (w, h, levels, bins, seed) in
+        [(130, 75, 4, 30, 1), (160, 120, 5, 8, 2), (130, 75, 3, 0, 3), (200, 150, 6, 1, 4)]
+    {
+        let cfg = Config { n_levels: levels, orientation_bins: bins, ..Config::default() };
         let img = t::test_image(w, h, seed);
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         let lv = t::upload_pyramid(&ctx, &cfg, &b, &img);
         let kps = keypoints(&lv, b.layout.capacity as usize, seed);
-        assert!(
-            kps.len() > 64,
-            "{} keypoints: cover more than one workgroup",
-            kps.len()
-        );
+        assert!(kps.len() > 64, "{} keypoints: cover more than one workgroup", kps.len());
         upload_keypoints(&ctx, &b, &kps);
         // a slot past the count must stay untouched
-        let sentinel = GpuKeypoint {
-            level: 0,
-            m10: 4242,
-            bin: 4242,
-            ..Default::default()
-        };
+        let sentinel = GpuKeypoint { level: 0, m10: 4242, bin: 4242, ..Default::default() };
         if kps.len() < b.layout.capacity as usize {
-            ctx.queue.write_buffer(
-                &b.keypoints,
-                (kps.len() as u64) * KP_WORDS * 4,
-                bytemuck::bytes_of(&sentinel),
-            );
+            ctx.queue.write_buffer(&b.keypoints, (kps.len() as u64) * KP_WORDS * 4, bytemuck::bytes_of(&sentinel));
         }
         t::run(&ctx, &pass, &b).unwrap();
         let got = download_keypoints(&ctx, &b);
@@ -515,25 +354,11 @@ fn orientation_matches_cpu() {
             let (m10, m01) = moments(&lv[k.level as usize], k.px, k.py);
             let bin = angle_bins.bin_of(m10, m01);
             bins_seen.insert(bin);
-            let want = GpuKeypoint {
-                m10,
-                m01,
-                bin,
-                angle: g.angle,
-                ..*k
-            };
+            let want = GpuKeypoint { m10, m01, bin, angle: g.angle, ..*k };
             assert_eq!(*g, want, "{w}x{h} bins {bins} keypoint {i}");
             let a = angle_deg(m10, m01);
-            assert!(
-                (0.0..360.0).contains(&g.angle),
-                "angle {} out of range",
-                g.angle
-            );
-            assert!(
-                circular_diff(g.angle, a) < 0.01,
-                "{w}x{h} keypoint {i}: angle {} vs {a}",
-                g.angle
-            );
+            assert!((0.0..360.0).contains(&g.angle), "angle {} out of range", g.angle);
+            assert!(circular_diff(g.angle, a) < 0.01, "{w}x{h} keypoint {i}: angle {} vs {a}", g.angle);
         }
         if kps.len() < b.layout.capacity as usize {
             assert_eq!(got[kps.len()], sentinel, "slot past the count");
@@ -549,11 +374,7 @@ fn orientation_of_literal_directions() {
     // Ramps in the four axis directions and a flat patch: bins and angles by hand.
     let Some(ctx) = t::context() else { return };
     let pass = OrientationPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 1,
-        orientation_bins: 30,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, orientation_bins: 30, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 64, 64).unwrap();
     type Pattern = fn(u32, u32) -> u8;
     let cases: [(Pattern, u32, f32); 5] = [
@@ -564,33 +385,21 @@ fn orientation_of_literal_directions() {
         (|_, _| 0, 0, 0.0),
     ];
     for (f, bin, angle) in cases {
-        let img =
-            Plane::from_vec(64, 64, (0..64 * 64).map(|i| f(i % 64, i / 64)).collect()).unwrap();
+        let img = Plane::from_vec(64, 64, (0..64 * 64).map(|i| f(i % 64, i / 64)).collect()).unwrap();
         t::upload_plane(&ctx, &b, &b.gray, 0, &img);
-        let kp = GpuKeypoint {
-            px: 32,
-            py: 32,
-            ..Default::default()
-        };
+        let kp = GpuKeypoint { px: 32, py: 32, ..Default::default() };
         upload_keypoints(&ctx, &b, &[kp]);
         t::run(&ctx, &pass, &b).unwrap();
         let g = download_keypoints(&ctx, &b)[0];
         assert_eq!((g.m10, g.m01), moments(&img, 32, 32));
         assert_eq!(g.bin, bin, "angle {angle}");
-        assert!(
-            circular_diff(g.angle, angle) < 1e-3,
-            "{} vs {angle}",
-            g.angle
-        );
+        assert!(circular_diff(g.angle, angle) < 1e-3, "{} vs {angle}", g.angle);
     }
 }
 
 /// The CPU smoothed levels, uploaded into `smooth`.
 fn upload_smooth(ctx: &GpuContext, b: &Buffers, levels: &[Plane<u8>]) -> Vec<Plane<u8>> {
-    let smooth: Vec<Plane<u8>> = levels
-        .iter()
-        .map(|p| blur::gaussian_blur(p, &blur::ORB_KERNEL))
-        .collect();
+    let smooth: Vec<Plane<u8>> = levels.iter().map(|p| blur::gaussian_blur(p, &blur::ORB_KERNEL)).collect();
     for (l, p) in smooth.iter().enumerate() {
         t::upload_plane(ctx, b, &b.smooth, l, p);
     }
@@ -601,13 +410,8 @@ fn upload_smooth(ctx: &GpuContext, b: &Buffers, levels: &[Plane<u8>]) -> Vec<Pla
 fn orb_matches_cpu_with_bins() {
     let Some(ctx) = t::context() else { return };
     let pass = OrbPass::new(&ctx.device);
-    for (w, h, levels, bins, seed) in [(130, 75, 4, 30, 1), (160, 120, 5, 8, 2), (97, 150, 3, 1, 3)]
-    {
-        let cfg = Config {
-            n_levels: levels,
-            orientation_bins: bins,
-            ..Config::default()
-        };
+    for (w, h, levels, bins, seed) in [(130, 75, 4, 30, 1), (160, 120, 5, 8, 2), (97, 150, 3, 1, 3)] {
+        let cfg = Config { n_levels: levels, orientation_bins: bins, ..Config::default() };
         let img = t::test_image(w, h, seed);
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         let lv = t::cpu_levels(&cfg, &img);
@@ -617,28 +421,15 @@ fn orb_matches_cpu_with_bins() {
         for (i, k) in kps.iter_mut().enumerate() {
             // the CPU's bin half the time, any bin otherwise: each table must be exact
             let (m10, m01) = moments(&lv[k.level as usize], k.px, k.py);
-            k.bin = if i % 2 == 0 {
-                tables.bins.bin_of(m10, m01)
-            } else {
-                (i as u32 * 7) % bins
-            };
+            k.bin = if i % 2 == 0 { tables.bins.bin_of(m10, m01) } else { (i as u32 * 7) % bins };
         }
         assert!(kps.len() > 64);
         upload_keypoints(&ctx, &b, &kps);
         t::run(&ctx, &pass, &b).unwrap();
         let got = download_descriptors(&ctx, &b, kps.len() + 1);
         for (i, k) in kps.iter().enumerate() {
-            let want = describe(
-                &smooth[k.level as usize],
-                k.px,
-                k.py,
-                &tables.tables[k.bin as usize],
-            );
-            assert_eq!(
-                got[i], want,
-                "{w}x{h} bins {bins} keypoint {i} ({}, {}) level {}",
-                k.px, k.py, k.level
-            );
+            let want = describe(&smooth[k.level as usize], k.px, k.py, &tables.tables[k.bin as usize]);
+            assert_eq!(got[i], want, "{w}x{h} bins {bins} keypoint {i} ({}, {}) level {}", k.px, k.py, k.level);
         }
         if kps.len() < b.layout.capacity as usize {
             assert_eq!(got[kps.len()], [0u8; 32], "slot past the count");
@@ -651,18 +442,9 @@ fn orb_one_bit_by_hand() {
     // Pair 0 of the unrotated pattern is (8,-3) vs (9,5): bit 0 of byte 0.
     let Some(ctx) = t::context() else { return };
     let pass = OrbPass::new(&ctx.device);
-    let cfg = Config {
-        n_levels: 1,
-        orientation_bins: 4,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, orientation_bins: 4, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 41, 41).unwrap();
-    let kp = GpuKeypoint {
-        px: 20,
-        py: 20,
-        bin: 0,
-        ..Default::default()
-    };
+    let kp = GpuKeypoint { px: 20, py: 20, bin: 0, ..Default::default() };
     upload_keypoints(&ctx, &b, &[kp]);
     let mut img = vec![100u32; 41 * 41];
     img[25 * 41 + 29] = 101;
@@ -679,11 +461,7 @@ fn orb_continuous_within_a_few_bits() {
     let pass = OrbPass::new(&ctx.device);
     let (mut total_bits, mut total_kps) = (0u32, 0usize);
     for (w, h, levels, seed) in [(130, 75, 4, 1), (160, 120, 5, 2)] {
-        let cfg = Config {
-            n_levels: levels,
-            orientation_bins: 0,
-            ..Config::default()
-        };
+        let cfg = Config { n_levels: levels, orientation_bins: 0, ..Config::default() };
         let img = t::test_image(w, h, seed);
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         let lv = t::cpu_levels(&cfg, &img);
@@ -692,38 +470,21 @@ fn orb_continuous_within_a_few_bits() {
         let exact = [0.0f32, 90.0, 180.0, 270.0, 45.0, 12.0, 359.9];
         for (i, k) in kps.iter_mut().enumerate() {
             let (m10, m01) = moments(&lv[k.level as usize], k.px, k.py);
-            k.angle = if i % 4 == 3 {
-                exact[i / 4 % exact.len()]
-            } else {
-                angle_deg(m10, m01)
-            };
+            k.angle = if i % 4 == 3 { exact[i / 4 % exact.len()] } else { angle_deg(m10, m01) };
         }
         upload_keypoints(&ctx, &b, &kps);
         t::run(&ctx, &pass, &b).unwrap();
         let got = download_descriptors(&ctx, &b, kps.len());
         for (i, k) in kps.iter().enumerate() {
-            let want = describe_continuous(
-                &smooth[k.level as usize],
-                k.px,
-                k.py,
-                k.angle,
-                Pattern::orb(),
-            );
+            let want = describe_continuous(&smooth[k.level as usize], k.px, k.py, k.angle, Pattern::orb());
             let d = hamming(&got[i], &want);
-            assert!(
-                d <= 4,
-                "{w}x{h} keypoint {i} angle {}: {d} bits differ",
-                k.angle
-            );
+            assert!(d <= 4, "{w}x{h} keypoint {i} angle {}: {d} bits differ", k.angle);
             total_bits += d;
         }
         total_kps += kps.len();
     }
     // differences only where a rotated offset lands on a rounding tie
-    assert!(
-        total_bits as usize <= total_kps / 4 + 4,
-        "{total_bits} bits differ over {total_kps} keypoints"
-    );
+    assert!(total_bits as usize <= total_kps / 4 + 4, "{total_bits} bits differ over {total_kps} keypoints");
 }
 
 #[test]
@@ -732,10 +493,7 @@ fn orientation_then_orb_match_the_cpu_detector_path() {
     // orientation pass writes selects the table the ORB pass reads.
     let Some(ctx) = t::context() else { return };
     let (orientation, orb) = (OrientationPass::new(&ctx.device), OrbPass::new(&ctx.device));
-    let cfg = Config {
-        n_levels: 4,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 4, ..Config::default() };
     let (w, h) = (130, 75);
     let img = t::test_image(w, h, 9);
     let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
@@ -749,12 +507,8 @@ fn orientation_then_orb_match_the_cpu_detector_path() {
     let got = download_descriptors(&ctx, &b, kps.len());
     for (i, k) in kps.iter().enumerate() {
         let (m10, m01) = moments(&lv[k.level as usize], k.px, k.py);
-        let want = describe(
-            &smooth[k.level as usize],
-            k.px,
-            k.py,
-            &tables.tables[tables.bins.bin_of(m10, m01) as usize],
-        );
+        let want =
+            describe(&smooth[k.level as usize], k.px, k.py, &tables.tables[tables.bins.bin_of(m10, m01) as usize]);
         assert_eq!(got[i], want, "keypoint {i}");
     }
 }

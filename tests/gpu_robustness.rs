@@ -12,9 +12,9 @@ use common::plane_fn as plane;
 use lfast::config::{Config, Mode};
 use lfast::cpu::CpuDetector;
 use lfast::gpu::detector::{Frame, GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
-use lfast::testing as t;
 use lfast::gpu::{GpuContext, GpuOptions};
 use lfast::image::load_gray;
+use lfast::testing as t;
 use lfast::wgpu;
 use lfast::{Backend, Detector, Error, KeyPoint, Plane};
 use proptest::prelude::*;
@@ -40,11 +40,7 @@ fn same(what: &str, gpu: &Frame, cpu: &CpuResult) -> Result<(), String> {
         ));
     }
     if gpu.raw.len() != gpu.keypoints.len() {
-        return Err(format!(
-            "{what}: {} raw keypoints for {} keypoints",
-            gpu.raw.len(),
-            gpu.keypoints.len()
-        ));
+        return Err(format!("{what}: {} raw keypoints for {} keypoints", gpu.raw.len(), gpu.keypoints.len()));
     }
     for (i, (g, c)) in gpu.keypoints.iter().zip(&cpu.0).enumerate() {
         if g != c {
@@ -53,10 +49,7 @@ fn same(what: &str, gpu: &Frame, cpu: &CpuResult) -> Result<(), String> {
     }
     for (i, (g, c)) in gpu.descriptors.iter().zip(&cpu.1).enumerate() {
         if g != c {
-            return Err(format!(
-                "{what}: descriptor {i} of {:?}: GPU {g:?} CPU {c:?}",
-                gpu.keypoints[i]
-            ));
+            return Err(format!("{what}: descriptor {i} of {:?}: GPU {g:?} CPU {c:?}", gpu.keypoints[i]));
         }
     }
     Ok(())
@@ -71,11 +64,7 @@ fn assert_same(what: &str, gpu: &Frame, cpu: &CpuResult) {
 /// `Ok` when two GPU frames are identical to the bit, raw keypoints included.
 fn identical(what: &str, a: &Frame, b: &Frame) -> Result<(), String> {
     if a.raw.len() != b.raw.len() {
-        return Err(format!(
-            "{what}: {} vs {} keypoints",
-            a.raw.len(),
-            b.raw.len()
-        ));
+        return Err(format!("{what}: {} vs {} keypoints", a.raw.len(), b.raw.len()));
     }
     for (i, (x, y)) in a.raw.iter().zip(&b.raw).enumerate() {
         if bytemuck::bytes_of(x) != bytemuck::bytes_of(y) {
@@ -86,11 +75,7 @@ fn identical(what: &str, a: &Frame, b: &Frame) -> Result<(), String> {
         return Err(format!("{what}: keypoints differ"));
     }
     if a.descriptors != b.descriptors {
-        let i = a
-            .descriptors
-            .iter()
-            .zip(&b.descriptors)
-            .position(|(x, y)| x != y);
+        let i = a.descriptors.iter().zip(&b.descriptors).position(|(x, y)| x != y);
         return Err(format!("{what}: descriptors differ (first at {i:?})"));
     }
     Ok(())
@@ -174,9 +159,7 @@ fn render(c: &Content, w: u32, h: u32) -> Plane<u8> {
 fn contents(w: u32, h: u32, rich: bool) -> BoxedStrategy<Content> {
     let mut arms: Vec<BoxedStrategy<Content>> = vec![
         any::<u32>().prop_map(Content::Structured).boxed(),
-        (any::<u32>(), 1u8..48)
-            .prop_map(|(s, a)| Content::Mixed(s, a))
-            .boxed(),
+        (any::<u32>(), 1u8..48).prop_map(|(s, a)| Content::Mixed(s, a)).boxed(),
         any::<u32>().prop_map(Content::Blocks).boxed(),
     ];
     if !rich {
@@ -185,11 +168,7 @@ fn contents(w: u32, h: u32, rich: bool) -> BoxedStrategy<Content> {
     }
     let n = (w * h) as usize;
     if n <= 4096 {
-        arms.push(
-            proptest::collection::vec(any::<u8>(), n)
-                .prop_map(Content::Pixels)
-                .boxed(),
-        );
+        arms.push(proptest::collection::vec(any::<u8>(), n).prop_map(Content::Pixels).boxed());
         // a second pixel arm with few gray levels: large flat areas and steps
         arms.push(
             proptest::collection::vec(prop_oneof![Just(0u8), Just(128u8), Just(255u8)], n)
@@ -211,23 +190,14 @@ fn runner(cases: u32) -> TestRunner {
 
 /// The default config in `mode`.
 fn default_in(mode: Mode) -> Config {
-    Config {
-        mode,
-        ..Config::default()
-    }
+    Config { mode, ..Config::default() }
 }
 
 /// The smallest border and NMS window, few levels: corners fit in frames from
 /// 15x15 on, and keypoints sit closer to the sides than the descriptor's
 /// pattern reaches.
 fn tight(mode: Mode) -> Config {
-    Config {
-        mode,
-        border: 7,
-        nms_radius: 1,
-        n_levels: 3,
-        ..Config::default()
-    }
+    Config { mode, border: 7, nms_radius: 1, n_levels: 3, ..Config::default() }
 }
 
 /// Property: for random contents of each size, GPU keypoints, descriptors and
@@ -235,18 +205,10 @@ fn tight(mode: Mode) -> Config {
 /// `cfgs`. One workspace per config is reused across cases and sizes.
 fn gpu_equals_cpu_on(sizes: &[(u32, u32)], cases: u32, rich: bool, cfgs: &[Config]) {
     let Some(ctx) = t::context() else { return };
-    let dets: Vec<(
-        String,
-        GpuDetector,
-        CpuDetector,
-        RefCell<Option<GpuWorkspace>>,
-    )> = cfgs
+    let dets: Vec<(String, GpuDetector, CpuDetector, RefCell<Option<GpuWorkspace>>)> = cfgs
         .iter()
         .map(|cfg| {
-            let name = format!(
-                "{:?} border {} r {} levels {}",
-                cfg.mode, cfg.border, cfg.nms_radius, cfg.n_levels
-            );
+            let name = format!("{:?} border {} r {} levels {}", cfg.mode, cfg.border, cfg.nms_radius, cfg.n_levels);
             (
                 name,
                 GpuDetector::new(ctx.clone(), cfg.clone()).unwrap(),
@@ -267,25 +229,15 @@ fn gpu_equals_cpu_on(sizes: &[(u32, u32)], cases: u32, rich: bool, cfgs: &[Confi
             let g = gpu
                 .detect_and_compute(&mut ws, img.view(), None)
                 .map_err(|e| TestCaseError::fail(format!("{what}: {e}")))?;
-            let c = cpu
-                .detect_and_compute(img.view(), None)
-                .map_err(|e| TestCaseError::fail(format!("{what}: {e}")))?;
+            let c =
+                cpu.detect_and_compute(img.view(), None).map_err(|e| TestCaseError::fail(format!("{what}: {e}")))?;
             same(&what, &g, &c).map_err(TestCaseError::fail)?;
             corners.set(corners.get() + g.keypoints.len());
-            let ge = gpu
-                .edge_image(&mut ws, img.view())
-                .map_err(|e| TestCaseError::fail(format!("{what}: {e}")))?;
-            let ce = cpu
-                .edge_image(img.view())
-                .map_err(|e| TestCaseError::fail(format!("{what}: {e}")))?;
+            let ge = gpu.edge_image(&mut ws, img.view()).map_err(|e| TestCaseError::fail(format!("{what}: {e}")))?;
+            let ce = cpu.edge_image(img.view()).map_err(|e| TestCaseError::fail(format!("{what}: {e}")))?;
             prop_assert_eq!((ge.width, ge.height), (w, h));
             if ge.data != ce.data {
-                let i = ge
-                    .data
-                    .iter()
-                    .zip(&ce.data)
-                    .position(|(a, b)| a != b)
-                    .unwrap_or(0) as u32;
+                let i = ge.data.iter().zip(&ce.data).position(|(a, b)| a != b).unwrap_or(0) as u32;
                 return Err(TestCaseError::fail(format!(
                     "{what}: edge maps differ first at ({}, {}): GPU {} CPU {}",
                     i % w,
@@ -299,11 +251,7 @@ fn gpu_equals_cpu_on(sizes: &[(u32, u32)], cases: u32, rich: bool, cfgs: &[Confi
         if let Err(e) = r {
             panic!("{w}x{h}: {e}");
         }
-        eprintln!(
-            "{w}x{h}: {cases} cases, {} keypoints in all, {:.2?}",
-            corners.get(),
-            start.elapsed()
-        );
+        eprintln!("{w}x{h}: {cases} cases, {} keypoints in all, {:.2?}", corners.get(), start.elapsed());
     }
 }
 
@@ -324,11 +272,7 @@ fn prop_tiny_sizes_gpu_equals_cpu() {
         &[(1, 1), (2, 2), (7, 7)],
         12,
         false,
-        &[
-            default_in(Mode::Branch),
-            default_in(Mode::Paper),
-            tight(Mode::Branch),
-        ],
+        &[default_in(Mode::Branch), default_in(Mode::Paper), tight(Mode::Branch)],
     );
 }
 
@@ -340,26 +284,14 @@ fn prop_16x16_and_17x33_gpu_equals_cpu() {
         default_in(Mode::Branch),
         tight(Mode::Branch),
         tight(Mode::Paper),
-        Config {
-            border: 7,
-            ..default_in(Mode::Paper)
-        },
+        Config { border: 7, ..default_in(Mode::Paper) },
     ];
     gpu_equals_cpu_on(&[(16, 16), (17, 33)], 16, false, &cfgs);
 }
 
 #[test]
 fn prop_255x257_gpu_equals_cpu() {
-    gpu_equals_cpu_on(
-        &[(255, 257)],
-        5,
-        true,
-        &[
-            default_in(Mode::Branch),
-            default_in(Mode::Paper),
-            tight(Mode::Paper),
-        ],
-    );
+    gpu_equals_cpu_on(&[(255, 257)], 5, true, &[default_in(Mode::Branch), default_in(Mode::Paper), tight(Mode::Paper)]);
 }
 
 #[test]
@@ -381,11 +313,7 @@ fn prop_4097x3_gpu_equals_cpu() {
         &[(4097, 3)],
         3,
         false,
-        &[
-            default_in(Mode::Branch),
-            default_in(Mode::Paper),
-            tight(Mode::Branch),
-        ],
+        &[default_in(Mode::Branch), default_in(Mode::Paper), tight(Mode::Branch)],
     );
 }
 
@@ -395,24 +323,9 @@ fn detector_front_door_edge_images_equal_the_cpu() {
     let det = Detector::new(Config::default(), Backend::Gpu).unwrap();
     assert_eq!(det.backend_name(), "gpu");
     let cpu = CpuDetector::new(Config::default()).unwrap();
-    for (i, &(w, h)) in [
-        (1, 1),
-        (2, 2),
-        (7, 7),
-        (16, 16),
-        (17, 33),
-        (255, 257),
-        (4097, 3),
-    ]
-    .iter()
-    .enumerate()
-    {
+    for (i, &(w, h)) in [(1, 1), (2, 2), (7, 7), (16, 16), (17, 33), (255, 257), (4097, 3)].iter().enumerate() {
         let img = t::test_image(w, h, 900 + i as u32);
-        assert_eq!(
-            det.edge_image(img.view()).unwrap().data,
-            cpu.edge_image(img.view()).unwrap().data,
-            "{w}x{h}"
-        );
+        assert_eq!(det.edge_image(img.view()).unwrap().data, cpu.edge_image(img.view()).unwrap().data, "{w}x{h}");
         let (k, d) = det.detect_and_compute(img.view(), None).unwrap();
         let c = cpu.detect_and_compute(img.view(), None).unwrap();
         assert_eq!((k, d), c, "{w}x{h}");
@@ -426,18 +339,9 @@ fn detector_front_door_edge_images_equal_the_cpu() {
 /// with many equal responses (black and white blocks), a structured one.
 fn determinism_frames() -> Vec<(String, Plane<u8>)> {
     vec![
-        (
-            "camera".into(),
-            load_gray(common::data("camera_cc0_v0.18plus.png")).unwrap(),
-        ),
-        (
-            "blocks 300x220".into(),
-            render(&Content::Blocks(5), 300, 220),
-        ),
-        (
-            "mixed 320x240".into(),
-            render(&Content::Mixed(11, 30), 320, 240),
-        ),
+        ("camera".into(), load_gray(common::data("camera_cc0_v0.18plus.png")).unwrap()),
+        ("blocks 300x220".into(), render(&Content::Blocks(5), 300, 220)),
+        ("mixed 320x240".into(), render(&Content::Mixed(11, 30), 320, 240)),
     ]
 }
 
@@ -448,47 +352,27 @@ fn repeated_frames_are_bit_identical() {
     for cfg in [
         Config::default(),
         // thousands of corners, a cap that cuts among them, equal responses
-        Config {
-            mode: Mode::Paper,
-            nms_radius: 0,
-            border: 7,
-            n_features: 2000,
-            ..Config::default()
-        },
+        Config { mode: Mode::Paper, nms_radius: 0, border: 7, n_features: 2000, ..Config::default() },
     ] {
         let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
         let cpu = CpuDetector::new(cfg.clone()).unwrap();
         // a: a fresh workspace per frame
         let t0 = Instant::now();
-        let a: Vec<Frame> = frames
-            .iter()
-            .map(|(_, f)| gpu.detect_and_compute(&mut None, f.view(), None).unwrap())
-            .collect();
+        let a: Vec<Frame> =
+            frames.iter().map(|(_, f)| gpu.detect_and_compute(&mut None, f.view(), None).unwrap()).collect();
 
         for ((name, f), g) in frames.iter().zip(&a) {
-            assert_same(
-                &format!("{name} {cfg:?}"),
-                g,
-                &cpu.detect_and_compute(f.view(), None).unwrap(),
-            );
+            assert_same(&format!("{name} {cfg:?}"), g, &cpu.detect_and_compute(f.view(), None).unwrap());
         }
         let camera = a[0].keypoints.len();
-        assert!(
-            camera > 1000,
-            "the camera frame should have many keypoints, has {camera}"
-        );
+        assert!(camera > 1000, "the camera frame should have many keypoints, has {camera}");
         // b: one workspace through all frames, the camera twice in a row, and
         // each frame after a different one of another size
         let mut ws = None;
         let order = [0, 0, 2, 1];
         for (k, &i) in order.iter().enumerate() {
-            let g = gpu
-                .detect_and_compute(&mut ws, frames[i].1.view(), None)
-                .unwrap();
-            let what = format!(
-                "{} run {k} {:?} n_features {}",
-                frames[i].0, cfg.mode, cfg.n_features
-            );
+            let g = gpu.detect_and_compute(&mut ws, frames[i].1.view(), None).unwrap();
+            let what = format!("{} run {k} {:?} n_features {}", frames[i].0, cfg.mode, cfg.n_features);
             identical(&what, &a[i], &g).unwrap_or_else(|e| panic!("{e}"));
         }
         eprintln!(
@@ -510,24 +394,14 @@ fn frames_in_flight_are_bit_identical_to_blocking_ones() {
     let gpu = GpuDetector::with_options(
         ctx.clone(),
         cfg,
-        GpuDetectorOptions {
-            ring: 4,
-            profile: false,
-            ..Default::default()
-        },
+        GpuDetectorOptions { ring: 4, profile: false, ..Default::default() },
     )
     .unwrap();
     let astronaut = load_gray(common::data("astronaut_256.png")).unwrap();
     let (w, h) = (astronaut.width, astronaut.height);
-    let frames: Vec<Plane<u8>> = vec![
-        astronaut.clone(),
-        render(&Content::Blocks(2), w, h),
-        astronaut.clone(),
-    ];
-    let blocking: Vec<Frame> = frames
-        .iter()
-        .map(|f| gpu.detect_and_compute(&mut None, f.view(), None).unwrap())
-        .collect();
+    let frames: Vec<Plane<u8>> = vec![astronaut.clone(), render(&Content::Blocks(2), w, h), astronaut.clone()];
+    let blocking: Vec<Frame> =
+        frames.iter().map(|f| gpu.detect_and_compute(&mut None, f.view(), None).unwrap()).collect();
     let mut ws = gpu.workspace(w, h).unwrap();
     // Each frame goes through its own gray buffer (GpuInput::GrayBuffer), so
     // all can be recorded into one encoder.
@@ -550,15 +424,12 @@ fn frames_in_flight_are_bit_identical_to_blocking_ones() {
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         let mut tickets = Vec::new();
         for input in &inputs {
-            gpu.encode(&mut enc, GpuInput::GrayBuffer(input), &mut ws)
-                .unwrap();
+            gpu.encode(&mut enc, GpuInput::GrayBuffer(input), &mut ws).unwrap();
             tickets.push(gpu.encode_readback(&mut enc, &mut ws).unwrap());
             if !one_submit {
-                ctx.queue.submit([std::mem::replace(
-                    &mut enc,
-                    ctx.device.create_command_encoder(&Default::default()),
-                )
-                .finish()]);
+                ctx.queue.submit([
+                    std::mem::replace(&mut enc, ctx.device.create_command_encoder(&Default::default())).finish()
+                ]);
             }
         }
         ctx.queue.submit([enc.finish()]);
@@ -568,12 +439,8 @@ fn frames_in_flight_are_bit_identical_to_blocking_ones() {
         // redeem out of order
         for (i, &tk) in tickets.iter().enumerate().rev() {
             let g = gpu.finish_readback(&mut ws, tk).unwrap();
-            identical(
-                &format!("frame {i}, one submit {one_submit}"),
-                &blocking[i],
-                &g,
-            )
-            .unwrap_or_else(|e| panic!("{e}"));
+            identical(&format!("frame {i}, one submit {one_submit}"), &blocking[i], &g)
+                .unwrap_or_else(|e| panic!("{e}"));
         }
     }
     assert!(blocking[0].keypoints.len() > 100);
@@ -589,18 +456,12 @@ fn env_adapter() -> wgpu::Adapter {
     desc.backends = backends;
     let inst = wgpu::Instance::new(desc);
     let all = pollster::block_on(inst.enumerate_adapters(backends));
-    let want = std::env::var("WGPU_ADAPTER_NAME")
-        .unwrap_or_default()
-        .to_lowercase();
-    all.into_iter()
-        .find(|a| a.get_info().name.to_lowercase().contains(&want))
-        .expect("the test adapter")
+    let want = std::env::var("WGPU_ADAPTER_NAME").unwrap_or_default().to_lowercase();
+    all.into_iter().find(|a| a.get_info().name.to_lowercase().contains(&want)).expect("the test adapter")
 }
 
 /// A context on a device of our own with `limits` (instead of the adapter's).
-fn context_with_limits(
-    limits: wgpu::Limits,
-) -> std::result::Result<GpuContext, wgpu::RequestDeviceError> {
+fn context_with_limits(limits: wgpu::Limits) -> std::result::Result<GpuContext, wgpu::RequestDeviceError> {
     let adapter = env_adapter();
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("small limits"),
@@ -616,27 +477,14 @@ fn is_device_lost(e: &Error) -> bool {
 
 /// A device of our own (the shared test device must stay alive), a detector
 /// that has run one frame on it, that frame's CPU result.
-fn doomed_device() -> (
-    GpuContext,
-    GpuDetector,
-    Option<GpuWorkspace>,
-    Plane<u8>,
-    CpuResult,
-) {
+fn doomed_device() -> (GpuContext, GpuDetector, Option<GpuWorkspace>, Plane<u8>, CpuResult) {
     let ctx = GpuContext::new(&GpuOptions::default()).unwrap();
     let cfg = Config::default();
     let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
     let img = t::test_image(96, 80, 4);
-    let cpu = CpuDetector::new(cfg)
-        .unwrap()
-        .detect_and_compute(img.view(), None)
-        .unwrap();
+    let cpu = CpuDetector::new(cfg).unwrap().detect_and_compute(img.view(), None).unwrap();
     let mut ws = None;
-    assert_same(
-        "before the loss",
-        &gpu.detect_and_compute(&mut ws, img.view(), None).unwrap(),
-        &cpu,
-    );
+    assert_same("before the loss", &gpu.detect_and_compute(&mut ws, img.view(), None).unwrap(), &cpu);
     (ctx, gpu, ws, img, cpu)
 }
 
@@ -655,25 +503,16 @@ fn device_loss_is_a_typed_error() {
     // after a destroy is `the_first_frame_after_a_loss_reports_device_lost`.
     let _ = ctx.device.poll(wgpu::PollType::Poll);
 
-    let e = gpu
-        .detect_and_compute(&mut ws, img.view(), None)
-        .unwrap_err();
+    let e = gpu.detect_and_compute(&mut ws, img.view(), None).unwrap_err();
     assert!(is_device_lost(&e), "detect_and_compute: {e:?}");
-    let e = gpu
-        .detect_and_compute(&mut None, img.view(), None)
-        .unwrap_err();
-    assert!(
-        is_device_lost(&e),
-        "detect_and_compute, fresh workspace: {e:?}"
-    );
+    let e = gpu.detect_and_compute(&mut None, img.view(), None).unwrap_err();
+    assert!(is_device_lost(&e), "detect_and_compute, fresh workspace: {e:?}");
     let e = gpu.edge_image(&mut ws, img.view()).unwrap_err();
     assert!(is_device_lost(&e), "edge_image: {e:?}");
     let e = gpu.workspace(96, 80).unwrap_err();
     assert!(is_device_lost(&e), "workspace: {e:?}");
     let mut enc = ctx.device.create_command_encoder(&Default::default());
-    let e = gpu
-        .encode(&mut enc, GpuInput::Written, &mut ws2)
-        .unwrap_err();
+    let e = gpu.encode(&mut enc, GpuInput::Written, &mut ws2).unwrap_err();
     assert!(is_device_lost(&e), "encode: {e:?}");
     drop(enc);
     let e = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap_err();
@@ -684,10 +523,7 @@ fn device_loss_is_a_typed_error() {
     let e = det.detect_and_compute(img.view(), None).unwrap_err();
     assert!(is_device_lost(&e), "Detector (from_context): {e:?}");
     let e = det.edge_image(img.view()).unwrap_err();
-    assert!(
-        is_device_lost(&e),
-        "Detector::edge_image (from_context): {e:?}"
-    );
+    assert!(is_device_lost(&e), "Detector::edge_image (from_context): {e:?}");
     assert!(e.to_string().contains("lost"), "{e}");
 }
 
@@ -698,19 +534,14 @@ fn the_first_frame_after_a_loss_reports_device_lost() {
     let Some(_) = t::context() else { return };
     let (ctx, gpu, mut ws, img, _) = doomed_device();
     ctx.device.destroy();
-    let e = gpu
-        .detect_and_compute(&mut ws, img.view(), None)
-        .unwrap_err();
+    let e = gpu.detect_and_compute(&mut ws, img.view(), None).unwrap_err();
     assert!(is_device_lost(&e), "the first frame after the loss: {e:?}");
 }
 
 /// Runs `f`, turning a panic into its message.
 fn no_panic<T>(f: impl FnOnce() -> T) -> Result<T, String> {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|p| {
-        p.downcast_ref::<String>()
-            .cloned()
-            .or(p.downcast_ref::<&str>().map(|s| s.to_string()))
-            .unwrap_or_default()
+        p.downcast_ref::<String>().cloned().or(p.downcast_ref::<&str>().map(|s| s.to_string())).unwrap_or_default()
     })
 }
 
@@ -732,27 +563,18 @@ fn right_after_a_loss_nothing_panics() {
         ctx.device.destroy();
         check(
             "detect_and_compute with a new workspace",
-            no_panic(|| {
-                gpu.detect_and_compute(&mut None, img.view(), None)
-                    .map(|_| ())
-            }),
+            no_panic(|| gpu.detect_and_compute(&mut None, img.view(), None).map(|_| ())),
         );
     }
     {
         let (ctx, gpu, _, _, _) = doomed_device();
         ctx.device.destroy();
-        check(
-            "GpuDetector::workspace",
-            no_panic(|| gpu.workspace(50, 40).map(|_| ())),
-        );
+        check("GpuDetector::workspace", no_panic(|| gpu.workspace(50, 40).map(|_| ())));
     }
     {
         let (ctx, gpu, _, _, _) = doomed_device();
         ctx.device.destroy();
-        check(
-            "GpuDetector::new",
-            no_panic(|| GpuDetector::new(ctx.clone(), gpu.config().clone()).map(|_| ())),
-        );
+        check("GpuDetector::new", no_panic(|| GpuDetector::new(ctx.clone(), gpu.config().clone()).map(|_| ())));
     }
     {
         let (ctx, gpu, _, _, _) = doomed_device();
@@ -779,27 +601,17 @@ fn a_frame_in_flight_when_the_device_is_lost() {
     ctx.device.destroy();
     // the frame either completed before the loss or reports it; it must not hang or panic
     match gpu.finish_readback(&mut ws, tk) {
-        Ok(f) => eprintln!(
-            "frame in flight finished before the loss: {} keypoints",
-            f.keypoints.len()
-        ),
+        Ok(f) => eprintln!("frame in flight finished before the loss: {} keypoints", f.keypoints.len()),
         Err(e) => {
             eprintln!("frame in flight: {e:?}");
-            assert!(
-                matches!(e, Error::DeviceLost { .. } | Error::Gpu { .. }),
-                "{e:?}"
-            );
+            assert!(matches!(e, Error::DeviceLost { .. } | Error::Gpu { .. }), "{e:?}");
         }
     }
 }
 
 /// The adapter's limits with storage bindings and buffers of at most `bytes`.
 fn small_buffers(bytes: u64) -> wgpu::Limits {
-    wgpu::Limits {
-        max_storage_buffer_binding_size: bytes,
-        max_buffer_size: bytes,
-        ..env_adapter().limits()
-    }
+    wgpu::Limits { max_storage_buffer_binding_size: bytes, max_buffer_size: bytes, ..env_adapter().limits() }
 }
 
 #[test]
@@ -815,35 +627,18 @@ fn frames_over_small_limits_are_gpu_limits_errors() {
     assert!(matches!(e, Error::GpuLimits { .. }), "workspace: {e:?}");
     eprintln!("400x300 on 1 MiB buffers: {e}");
     let mut ws = None;
-    let e = no_panic(|| gpu.detect_and_compute(&mut ws, big.view(), None))
-        .unwrap()
-        .unwrap_err();
-    assert!(
-        matches!(e, Error::GpuLimits { .. }),
-        "detect_and_compute: {e:?}"
-    );
-    let e = no_panic(|| gpu.edge_image(&mut ws, big.view()))
-        .unwrap()
-        .unwrap_err();
+    let e = no_panic(|| gpu.detect_and_compute(&mut ws, big.view(), None)).unwrap().unwrap_err();
+    assert!(matches!(e, Error::GpuLimits { .. }), "detect_and_compute: {e:?}");
+    let e = no_panic(|| gpu.edge_image(&mut ws, big.view())).unwrap().unwrap_err();
     assert!(matches!(e, Error::GpuLimits { .. }), "edge_image: {e:?}");
     // a frame that fits still works, before and after a refused one
     let small = t::test_image(200, 150, 6);
     let g = gpu.detect_and_compute(&mut ws, small.view(), None).unwrap();
-    assert_same(
-        "200x150 on 1 MiB buffers",
-        &g,
-        &cpu.detect_and_compute(small.view(), None).unwrap(),
-    );
-    let e = gpu
-        .detect_and_compute(&mut ws, big.view(), None)
-        .unwrap_err();
+    assert_same("200x150 on 1 MiB buffers", &g, &cpu.detect_and_compute(small.view(), None).unwrap());
+    let e = gpu.detect_and_compute(&mut ws, big.view(), None).unwrap_err();
     assert!(matches!(e, Error::GpuLimits { .. }), "{e:?}");
     let g = gpu.detect_and_compute(&mut ws, small.view(), None).unwrap();
-    assert_same(
-        "200x150 after a refused frame",
-        &g,
-        &cpu.detect_and_compute(small.view(), None).unwrap(),
-    );
+    assert_same("200x150 after a refused frame", &g, &cpu.detect_and_compute(small.view(), None).unwrap());
     // the front door on this device reports it too (from_context = Backend::Gpu)
     let det = Detector::from_context(ctx.clone(), cfg).unwrap();
     let e = det.detect_and_compute(big.view(), None).unwrap_err();
@@ -857,29 +652,16 @@ fn frames_whose_readback_exceeds_max_buffer_size_are_gpu_limits_errors() {
     // a staging buffer of the readback ring (1.48 MB, does not).
     let Some(_) = t::context() else { return };
     let ctx = context_with_limits(small_buffers(1 << 20)).unwrap();
-    let cfg = Config {
-        n_levels: 1,
-        nms_radius: 0,
-        border: 7,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, nms_radius: 0, border: 7, ..Config::default() };
     let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
     let img = t::test_image(150, 150, 8);
     let r = no_panic(|| gpu.detect_and_compute(&mut None, img.view(), None));
     match r {
         Err(p) => panic!("panicked: {p}"),
-        Ok(Ok(g)) => assert_same(
-            "150x150",
-            &g,
-            &CpuDetector::new(cfg)
-                .unwrap()
-                .detect_and_compute(img.view(), None)
-                .unwrap(),
-        ),
-        Ok(Err(e)) => assert!(
-            matches!(e, Error::GpuLimits { .. }),
-            "expected GpuLimits, got {e:?}"
-        ),
+        Ok(Ok(g)) => {
+            assert_same("150x150", &g, &CpuDetector::new(cfg).unwrap().detect_and_compute(img.view(), None).unwrap())
+        }
+        Ok(Err(e)) => assert!(matches!(e, Error::GpuLimits { .. }), "expected GpuLimits, got {e:?}"),
     }
     // and through the workspace alone: a workspace is either usable or refused
     match no_panic(|| gpu.workspace(150, 150)) {
@@ -893,11 +675,7 @@ fn frames_whose_readback_exceeds_max_buffer_size_are_gpu_limits_errors() {
             let tk = gpu.encode_readback(&mut enc, &mut ws).unwrap();
             ctx.queue.submit([enc.finish()]);
             let err = pollster::block_on(scope.pop());
-            assert!(
-                err.is_none(),
-                "a workspace the library handed out fails validation: {}",
-                err.unwrap()
-            );
+            assert!(err.is_none(), "a workspace the library handed out fails validation: {}", err.unwrap());
             gpu.start_readback(&mut ws, tk).unwrap();
             gpu.finish_readback(&mut ws, tk).unwrap();
         }
@@ -907,18 +685,13 @@ fn frames_whose_readback_exceeds_max_buffer_size_are_gpu_limits_errors() {
 #[test]
 fn frames_over_the_workgroup_limit_are_gpu_limits_errors() {
     let Some(_) = t::context() else { return };
-    let limits = wgpu::Limits {
-        max_compute_workgroups_per_dimension: 64,
-        ..env_adapter().limits()
-    };
+    let limits = wgpu::Limits { max_compute_workgroups_per_dimension: 64, ..env_adapter().limits() };
     let ctx = context_with_limits(limits).unwrap();
     let cfg = Config::default();
     let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
     // 1025 pixels wide = 65 workgroups of 16
     let wide = t::test_image(1025, 40, 9);
-    let e = no_panic(|| gpu.detect_and_compute(&mut None, wide.view(), None))
-        .unwrap()
-        .unwrap_err();
+    let e = no_panic(|| gpu.detect_and_compute(&mut None, wide.view(), None)).unwrap().unwrap_err();
     assert!(matches!(e, Error::GpuLimits { .. }), "{e:?}");
     // 1024 wide fits
     let ok = t::test_image(1024, 40, 9);
@@ -926,10 +699,7 @@ fn frames_over_the_workgroup_limit_are_gpu_limits_errors() {
     assert_same(
         "1024x40, 64 workgroups",
         &g,
-        &CpuDetector::new(cfg)
-            .unwrap()
-            .detect_and_compute(ok.view(), None)
-            .unwrap(),
+        &CpuDetector::new(cfg).unwrap().detect_and_compute(ok.view(), None).unwrap(),
     );
 }
 
@@ -940,30 +710,17 @@ fn keypoint_dispatches_over_the_workgroup_limit_are_gpu_limits_errors() {
     // corners cannot be dispatched: the frame must be refused (GpuLimits) or
     // processed correctly, never silently truncated.
     let Some(_) = t::context() else { return };
-    let limits = wgpu::Limits {
-        max_compute_workgroups_per_dimension: 64,
-        ..env_adapter().limits()
-    };
+    let limits = wgpu::Limits { max_compute_workgroups_per_dimension: 64, ..env_adapter().limits() };
     let ctx = context_with_limits(limits).unwrap();
-    let cfg = Config {
-        nms_radius: 0,
-        border: 7,
-        ..Config::default()
-    };
+    let cfg = Config { nms_radius: 0, border: 7, ..Config::default() };
     let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
     let img = load_gray(common::data("camera_cc0_v0.18plus.png")).unwrap(); // 512x512: 32 groups a side
-    let cpu = CpuDetector::new(cfg)
-        .unwrap()
-        .detect_and_compute(img.view(), None)
-        .unwrap();
+    let cpu = CpuDetector::new(cfg).unwrap().detect_and_compute(img.view(), None).unwrap();
     assert!(cpu.0.len() > 64 * 64, "{} keypoints", cpu.0.len());
     match no_panic(|| gpu.detect_and_compute(&mut None, img.view(), None)) {
         Err(p) => panic!("panicked: {p}"),
         Ok(Ok(g)) => assert_same("camera, 64 workgroups per dimension", &g, &cpu),
-        Ok(Err(e)) => assert!(
-            matches!(e, Error::GpuLimits { .. }),
-            "expected GpuLimits, got {e:?}"
-        ),
+        Ok(Err(e)) => assert!(matches!(e, Error::GpuLimits { .. }), "expected GpuLimits, got {e:?}"),
     }
 }
 
@@ -973,25 +730,11 @@ fn downlevel_limits_are_a_typed_error() {
     // detector is built.
     let Some(_) = t::context() else { return };
     let ctx = context_with_limits(wgpu::Limits::downlevel_defaults()).unwrap();
-    let e = no_panic(|| GpuDetector::new(ctx.clone(), Config::default()))
-        .unwrap()
-        .unwrap_err();
-    assert!(
-        matches!(
-            e,
-            Error::Gpu { .. } | Error::GpuLimits { .. } | Error::Unsupported { .. }
-        ),
-        "{e:?}"
-    );
+    let e = no_panic(|| GpuDetector::new(ctx.clone(), Config::default())).unwrap().unwrap_err();
+    assert!(matches!(e, Error::Gpu { .. } | Error::GpuLimits { .. } | Error::Unsupported { .. }), "{e:?}");
     eprintln!("downlevel_defaults: {e}");
     let e = Detector::from_context(ctx, Config::default()).unwrap_err();
-    assert!(
-        matches!(
-            e,
-            Error::Gpu { .. } | Error::GpuLimits { .. } | Error::Unsupported { .. }
-        ),
-        "{e:?}"
-    );
+    assert!(matches!(e, Error::Gpu { .. } | Error::GpuLimits { .. } | Error::Unsupported { .. }), "{e:?}");
 }
 
 #[test]
@@ -1001,24 +744,14 @@ fn auto_runs_a_frame_over_the_device_limits_on_the_cpu() {
     // the device's storage binding limit is refused by the GPU path; Auto
     // runs it on the CPU and keeps the GPU for the next frames.
     let Some(ctx) = t::context() else { return };
-    let cfg = Config {
-        nms_radius: 0,
-        border: 7,
-        ..Config::default()
-    };
-    let limit = ctx
-        .device
-        .limits()
-        .max_storage_buffer_binding_size
-        .min(ctx.device.limits().max_buffer_size);
+    let cfg = Config { nms_radius: 0, border: 7, ..Config::default() };
+    let limit = ctx.device.limits().max_storage_buffer_binding_size.min(ctx.device.limits().max_buffer_size);
     let over = |s: u32| {
         let l = lfast::gpu::FrameLayout::new(&cfg, s, s);
         l.capacity as u64 * 48 > limit || l.total_px as u64 * 4 > limit
     };
     let Some(side) = (64..=2048u32).step_by(32).find(|&s| over(s)) else {
-        eprintln!(
-            "NOT RUN: storage bindings of {limit} bytes hold every frame up to 2048x2048 on this device"
-        );
+        eprintln!("NOT RUN: storage bindings of {limit} bytes hold every frame up to 2048x2048 on this device");
         return;
     };
     eprintln!("the smallest square frame over {limit} bytes: {side}x{side}");
@@ -1034,15 +767,8 @@ fn auto_runs_a_frame_over_the_device_limits_on_the_cpu() {
         auto.detect_and_compute(small.view(), None).unwrap(),
         cpu.detect_and_compute(small.view(), None).unwrap()
     );
-    assert_eq!(
-        auto.detect_and_compute(big.view(), None).unwrap(),
-        cpu.detect_and_compute(big.view(), None).unwrap()
-    );
-    assert_eq!(
-        auto.backend_name(),
-        "gpu",
-        "a frame over the limits must not switch later frames to the CPU"
-    );
+    assert_eq!(auto.detect_and_compute(big.view(), None).unwrap(), cpu.detect_and_compute(big.view(), None).unwrap());
+    assert_eq!(auto.backend_name(), "gpu", "a frame over the limits must not switch later frames to the CPU");
     assert_eq!(
         auto.detect_and_compute(small.view(), None).unwrap(),
         cpu.detect_and_compute(small.view(), None).unwrap()
@@ -1052,16 +778,10 @@ fn auto_runs_a_frame_over_the_device_limits_on_the_cpu() {
 #[test]
 fn no_adapter_is_a_typed_error_and_auto_falls_back_to_the_cpu() {
     let Some(_) = t::context() else { return };
-    let opts = GpuOptions {
-        adapter_name: Some("no-such-adapter".into()),
-        ..Default::default()
-    };
+    let opts = GpuOptions { adapter_name: Some("no-such-adapter".into()), ..Default::default() };
     let e = GpuContext::new(&opts).unwrap_err();
     assert!(matches!(e, Error::NoAdapter { .. }), "{e:?}");
-    assert!(
-        e.to_string().contains("no-such-adapter"),
-        "the error names the adapter asked for: {e}"
-    );
+    assert!(e.to_string().contains("no-such-adapter"), "the error names the adapter asked for: {e}");
     eprintln!("{e}");
     let cfg = Config::default();
     let e = Detector::with_gpu_options(cfg.clone(), Backend::Gpu, &opts).unwrap_err();
@@ -1071,70 +791,35 @@ fn no_adapter_is_a_typed_error_and_auto_falls_back_to_the_cpu() {
     assert_eq!(auto.adapter_name(), None);
     let cpu = CpuDetector::new(cfg).unwrap();
     let img = load_gray(common::data("astronaut_256.png")).unwrap();
-    assert_eq!(
-        auto.detect_and_compute(img.view(), None).unwrap(),
-        cpu.detect_and_compute(img.view(), None).unwrap()
-    );
-    assert_eq!(
-        auto.edge_image(img.view()).unwrap().data,
-        cpu.edge_image(img.view()).unwrap().data
-    );
+    assert_eq!(auto.detect_and_compute(img.view(), None).unwrap(), cpu.detect_and_compute(img.view(), None).unwrap());
+    assert_eq!(auto.edge_image(img.view()).unwrap().data, cpu.edge_image(img.view()).unwrap().data);
 }
 
 #[test]
 fn unsupported_configs_are_typed_errors_and_auto_runs_them_on_the_cpu() {
     let Some(ctx) = t::context() else { return };
-    let cfg = Config {
-        distribution: true,
-        n_features: 150,
-        ..Config::default()
-    };
+    let cfg = Config { distribution: true, n_features: 150, ..Config::default() };
     let e = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap_err();
     assert!(matches!(e, Error::Unsupported { .. }), "{e:?}");
     let e = Detector::from_context(ctx.clone(), cfg.clone()).unwrap_err();
-    assert!(
-        matches!(e, Error::Unsupported { .. }),
-        "from_context: {e:?}"
-    );
+    assert!(matches!(e, Error::Unsupported { .. }), "from_context: {e:?}");
     let e = Detector::new(cfg.clone(), Backend::Gpu).unwrap_err();
-    assert!(
-        matches!(e, Error::Unsupported { .. }),
-        "Backend::Gpu: {e:?}"
-    );
+    assert!(matches!(e, Error::Unsupported { .. }), "Backend::Gpu: {e:?}");
     let auto = Detector::new(cfg.clone(), Backend::Auto).unwrap();
     assert_eq!(auto.backend_name(), "cpu");
     let img = load_gray(common::data("astronaut_256.png")).unwrap();
     let got = auto.detect_and_compute(img.view(), None).unwrap();
-    assert_eq!(
-        got,
-        CpuDetector::new(cfg)
-            .unwrap()
-            .detect_and_compute(img.view(), None)
-            .unwrap()
-    );
+    assert_eq!(got, CpuDetector::new(cfg).unwrap().detect_and_compute(img.view(), None).unwrap());
     assert!(!got.0.is_empty() && got.0.len() <= 150);
     // an invalid config is InvalidConfig on every backend, Auto included
-    let bad = Config {
-        n_levels: 0,
-        ..Config::default()
-    };
-    assert!(matches!(
-        GpuDetector::new(ctx.clone(), bad.clone()).unwrap_err(),
-        Error::InvalidConfig { .. }
-    ));
-    assert!(matches!(
-        Detector::new(bad.clone(), Backend::Auto).unwrap_err(),
-        Error::InvalidConfig { .. }
-    ));
+    let bad = Config { n_levels: 0, ..Config::default() };
+    assert!(matches!(GpuDetector::new(ctx.clone(), bad.clone()).unwrap_err(), Error::InvalidConfig { .. }));
+    assert!(matches!(Detector::new(bad.clone(), Backend::Auto).unwrap_err(), Error::InvalidConfig { .. }));
     // a readback ring of 0 slots
     let e = GpuDetector::with_options(
         ctx,
         Config::default(),
-        GpuDetectorOptions {
-            ring: 0,
-            profile: false,
-            ..Default::default()
-        },
+        GpuDetectorOptions { ring: 0, profile: false, ..Default::default() },
     )
     .unwrap_err();
     assert!(matches!(e, Error::InvalidConfig { .. }), "{e:?}");
@@ -1151,36 +836,22 @@ fn wrong_sizes_are_typed_errors() {
     let cpu = CpuDetector::new(cfg.clone()).unwrap();
     let mut ws = gpu.workspace(64, 48).unwrap();
     for (w, h) in [(65, 48), (64, 47), (48, 64), (1, 1)] {
-        let e = ws
-            .write_gray(&ctx.queue, Plane::<u8>::new(w, h).view())
-            .unwrap_err();
-        assert!(
-            matches!(e, Error::InvalidImage { .. }),
-            "gray {w}x{h}: {e:?}"
-        );
-        let e = gpu
-            .set_mask(&mut ws, Some(Plane::<u8>::new(w, h).view()))
-            .unwrap_err();
+        let e = ws.write_gray(&ctx.queue, Plane::<u8>::new(w, h).view()).unwrap_err();
+        assert!(matches!(e, Error::InvalidImage { .. }), "gray {w}x{h}: {e:?}");
+        let e = gpu.set_mask(&mut ws, Some(Plane::<u8>::new(w, h).view())).unwrap_err();
         assert!(matches!(e, Error::MaskSize { .. }), "mask {w}x{h}: {e:?}");
     }
     // the blocking API: a mask of another size than the image
     let img = t::test_image(64, 48, 12);
     let mut ows = None;
-    let e = gpu
-        .detect_and_compute(&mut ows, img.view(), Some(Plane::<u8>::new(63, 48).view()))
-        .unwrap_err();
+    let e = gpu.detect_and_compute(&mut ows, img.view(), Some(Plane::<u8>::new(63, 48).view())).unwrap_err();
     assert!(matches!(e, Error::MaskSize { .. }), "{e:?}");
     // an empty image and one over MAX_SIDE
     for (w, h) in [(0, 10), (10, 0), (lfast::image::MAX_SIDE + 1, 1)] {
         let e = gpu.workspace(w, h).unwrap_err();
-        assert!(
-            matches!(e, Error::InvalidImage { .. }),
-            "workspace {w}x{h}: {e:?}"
-        );
+        assert!(matches!(e, Error::InvalidImage { .. }), "workspace {w}x{h}: {e:?}");
     }
-    let e = gpu
-        .detect_and_compute(&mut ows, Plane::<u8>::new(0, 5).view(), None)
-        .unwrap_err();
+    let e = gpu.detect_and_compute(&mut ows, Plane::<u8>::new(0, 5).view(), None).unwrap_err();
     assert!(matches!(e, Error::InvalidImage { .. }), "{e:?}");
     // the workspace still works after the refusals, and the front door reports the same
     assert_same(
@@ -1189,20 +860,12 @@ fn wrong_sizes_are_typed_errors() {
         &cpu.detect_and_compute(img.view(), None).unwrap(),
     );
     let det = Detector::from_context(ctx.clone(), cfg.clone()).unwrap();
-    let e = det
-        .detect_and_compute(img.view(), Some(Plane::<u8>::new(63, 48).view()))
-        .unwrap_err();
+    let e = det.detect_and_compute(img.view(), Some(Plane::<u8>::new(63, 48).view())).unwrap_err();
     assert!(matches!(e, Error::MaskSize { .. }), "{e:?}");
     let auto = Detector::new(cfg, Backend::Auto).unwrap();
-    let e = auto
-        .detect_and_compute(img.view(), Some(Plane::<u8>::new(63, 48).view()))
-        .unwrap_err();
+    let e = auto.detect_and_compute(img.view(), Some(Plane::<u8>::new(63, 48).view())).unwrap_err();
     assert!(matches!(e, Error::MaskSize { .. }), "Auto: {e:?}");
-    assert_eq!(
-        auto.backend_name(),
-        "gpu",
-        "bad input must not switch Auto to the CPU"
-    );
+    assert_eq!(auto.backend_name(), "gpu", "bad input must not switch Auto to the CPU");
 }
 
 #[test]
@@ -1212,11 +875,7 @@ fn readback_tickets_are_checked() {
     let gpu = GpuDetector::with_options(
         ctx.clone(),
         cfg.clone(),
-        GpuDetectorOptions {
-            ring: 2,
-            profile: false,
-            ..Default::default()
-        },
+        GpuDetectorOptions { ring: 2, profile: false, ..Default::default() },
     )
     .unwrap();
     let cpu = CpuDetector::new(cfg).unwrap();
@@ -1232,44 +891,28 @@ fn readback_tickets_are_checked() {
     let t2 = gpu.encode_readback(&mut enc, &mut ws).unwrap();
     assert_ne!(t1, t2);
     let e = gpu.encode_readback(&mut enc, &mut ws).unwrap_err();
-    assert!(
-        matches!(e, Error::Gpu { .. }),
-        "a third readback on a ring of 2: {e:?}"
-    );
+    assert!(matches!(e, Error::Gpu { .. }), "a third readback on a ring of 2: {e:?}");
     // redeeming before starting
     assert!(gpu.try_finish_readback(&mut ws, t1).is_err());
-    assert!(
-        gpu.finish_readback(&mut ws, t1).is_err(),
-        "finish_readback before start_readback must not wait forever"
-    );
+    assert!(gpu.finish_readback(&mut ws, t1).is_err(), "finish_readback before start_readback must not wait forever");
     ctx.queue.submit([enc.finish()]);
     gpu.start_readback(&mut ws, t1).unwrap();
     // starting twice
-    assert!(matches!(
-        gpu.start_readback(&mut ws, t1).unwrap_err(),
-        Error::Gpu { .. }
-    ));
+    assert!(matches!(gpu.start_readback(&mut ws, t1).unwrap_err(), Error::Gpu { .. }));
     gpu.start_readback(&mut ws, t2).unwrap();
     assert_same("t1", &gpu.finish_readback(&mut ws, t1).unwrap(), &expected);
     // redeeming twice
     let e = gpu.finish_readback(&mut ws, t1).unwrap_err();
     assert!(matches!(e, Error::Gpu { .. }), "t1 redeemed twice: {e:?}");
     assert!(gpu.try_finish_readback(&mut ws, t1).is_err());
-    assert!(
-        gpu.start_readback(&mut ws, t1).is_err(),
-        "t1 restarted after it was redeemed"
-    );
+    assert!(gpu.start_readback(&mut ws, t1).is_err(), "t1 restarted after it was redeemed");
     assert_same("t2", &gpu.finish_readback(&mut ws, t2).unwrap(), &expected);
     assert!(gpu.finish_readback(&mut ws, t2).is_err());
     // a ticket of another workspace with a shorter ring
     let mut other = GpuDetector::with_options(
         ctx.clone(),
         Config::default(),
-        GpuDetectorOptions {
-            ring: 1,
-            profile: false,
-            ..Default::default()
-        },
+        GpuDetectorOptions { ring: 1, profile: false, ..Default::default() },
     )
     .unwrap()
     .workspace(80, 60)
@@ -1287,11 +930,7 @@ fn readback_tickets_are_checked() {
         gpu.start_readback(&mut ws, tk).unwrap();
     }
     for tk in [t4, t3] {
-        assert_same(
-            "second round",
-            &gpu.finish_readback(&mut ws, tk).unwrap(),
-            &expected,
-        );
+        assert_same("second round", &gpu.finish_readback(&mut ws, tk).unwrap(), &expected);
     }
 }
 
@@ -1303,11 +942,7 @@ fn a_stale_ticket_does_not_redeem_another_frame() {
     let gpu = GpuDetector::with_options(
         ctx.clone(),
         Config::default(),
-        GpuDetectorOptions {
-            ring: 1,
-            profile: false,
-            ..Default::default()
-        },
+        GpuDetectorOptions { ring: 1, profile: false, ..Default::default() },
     )
     .unwrap();
     let mut ws = gpu.workspace(80, 60).unwrap();
@@ -1336,10 +971,7 @@ fn a_stale_ticket_does_not_redeem_another_frame() {
             b_own.map(|f| f.keypoints.len())
         );
     }
-    assert_eq!(
-        gpu.finish_readback(&mut ws, tb).unwrap().keypoints.len(),
-        10
-    );
+    assert_eq!(gpu.finish_readback(&mut ws, tb).unwrap().keypoints.len(), 10);
 }
 
 #[test]
@@ -1357,23 +989,14 @@ fn bad_gpu_inputs_are_typed_errors() {
         mapped_at_creation: false,
     });
     let mut enc = ctx.device.create_command_encoder(&Default::default());
-    let e = gpu
-        .encode(&mut enc, GpuInput::GrayBuffer(&short), &mut ws)
-        .unwrap_err();
-    assert!(
-        matches!(e, Error::InvalidImage { .. }),
-        "short gray buffer: {e:?}"
-    );
+    let e = gpu.encode(&mut enc, GpuInput::GrayBuffer(&short), &mut ws).unwrap_err();
+    assert!(matches!(e, Error::InvalidImage { .. }), "short gray buffer: {e:?}");
     // textures: wrong size, unsupported format, format not the texture's, no TEXTURE_BINDING
     let tex = |tw: u32, th: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
         ctx.device
             .create_texture(&wgpu::TextureDescriptor {
                 label: None,
-                size: wgpu::Extent3d {
-                    width: tw,
-                    height: th,
-                    depth_or_array_layers: 1,
-                },
+                size: wgpu::Extent3d { width: tw, height: th, depth_or_array_layers: 1 },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
@@ -1387,55 +1010,19 @@ fn bad_gpu_inputs_are_typed_errors() {
     let bind = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
     type Case = (&'static str, wgpu::TextureView, F, fn(&Error) -> bool);
     let cases: Vec<Case> = vec![
-        (
-            "wrong size",
-            tex(w + 1, h, F::Rgba8Unorm, bind),
-            F::Rgba8Unorm,
-            |e| matches!(e, Error::InvalidImage { .. }),
-        ),
-        (
-            "wrong size, smaller",
-            tex(w, h - 1, F::R8Unorm, bind),
-            F::R8Unorm,
-            |e| matches!(e, Error::InvalidImage { .. }),
-        ),
-        (
-            "Rgba16Float",
-            tex(w, h, F::Rgba16Float, bind),
-            F::Rgba16Float,
-            |e| matches!(e, Error::Unsupported { .. }),
-        ),
-        (
-            "Rgba8UnormSrgb",
-            tex(w, h, F::Rgba8UnormSrgb, bind),
-            F::Rgba8UnormSrgb,
-            |e| matches!(e, Error::Unsupported { .. }),
-        ),
-        (
-            "no TEXTURE_BINDING",
-            tex(w, h, F::Rgba8Unorm, wgpu::TextureUsages::COPY_DST),
-            F::Rgba8Unorm,
-            |_| true,
-        ),
+        ("wrong size", tex(w + 1, h, F::Rgba8Unorm, bind), F::Rgba8Unorm, |e| matches!(e, Error::InvalidImage { .. })),
+        ("wrong size, smaller", tex(w, h - 1, F::R8Unorm, bind), F::R8Unorm, |e| {
+            matches!(e, Error::InvalidImage { .. })
+        }),
+        ("Rgba16Float", tex(w, h, F::Rgba16Float, bind), F::Rgba16Float, |e| matches!(e, Error::Unsupported { .. })),
+        ("Rgba8UnormSrgb", tex(w, h, F::Rgba8UnormSrgb, bind), F::Rgba8UnormSrgb, |e| {
+            matches!(e, Error::Unsupported { .. })
+        }),
+        ("no TEXTURE_BINDING", tex(w, h, F::Rgba8Unorm, wgpu::TextureUsages::COPY_DST), F::Rgba8Unorm, |_| true),
         // the format named is not the texture's
-        (
-            "R32Float named Rgba8Unorm",
-            tex(w, h, F::R32Float, bind),
-            F::Rgba8Unorm,
-            |_| true,
-        ),
-        (
-            "Rgba16Float named Rgba8Unorm",
-            tex(w, h, F::Rgba16Float, bind),
-            F::Rgba8Unorm,
-            |_| true,
-        ),
-        (
-            "Rgba8Unorm named R8Unorm",
-            tex(w, h, F::Rgba8Unorm, bind),
-            F::R8Unorm,
-            |_| true,
-        ),
+        ("R32Float named Rgba8Unorm", tex(w, h, F::R32Float, bind), F::Rgba8Unorm, |_| true),
+        ("Rgba16Float named Rgba8Unorm", tex(w, h, F::Rgba16Float, bind), F::Rgba8Unorm, |_| true),
+        ("Rgba8Unorm named R8Unorm", tex(w, h, F::Rgba8Unorm, bind), F::R8Unorm, |_| true),
     ];
     let mut failures = Vec::new();
     for (what, view, format, ok) in &cases {
@@ -1448,16 +1035,12 @@ fn bad_gpu_inputs_are_typed_errors() {
             Err(p) => failures.push(format!("{what}: PANICKED: {p}")),
             Ok(Ok(())) => failures.push(format!(
                 "{what}: encode returned Ok{}",
-                leaked
-                    .map(|e| format!(" (and raised a wgpu validation error: {e})"))
-                    .unwrap_or_default()
+                leaked.map(|e| format!(" (and raised a wgpu validation error: {e})")).unwrap_or_default()
             )),
             Ok(Err(e)) if !ok(&e) => failures.push(format!("{what}: unexpected error {e:?}")),
             Ok(Err(e)) => {
                 if let Some(v) = leaked {
-                    failures.push(format!(
-                        "{what}: {e:?}, but also raised a wgpu validation error: {v}"
-                    ));
+                    failures.push(format!("{what}: {e:?}, but also raised a wgpu validation error: {v}"));
                 } else {
                     eprintln!("{what}: {e}");
                 }
@@ -1466,17 +1049,8 @@ fn bad_gpu_inputs_are_typed_errors() {
     }
     // after all that the workspace still works
     let img = t::test_image(w, h, 16);
-    let g = gpu
-        .detect_and_compute(&mut Some(ws), img.view(), None)
-        .unwrap();
-    assert_same(
-        "after bad inputs",
-        &g,
-        &CpuDetector::new(cfg)
-            .unwrap()
-            .detect_and_compute(img.view(), None)
-            .unwrap(),
-    );
+    let g = gpu.detect_and_compute(&mut Some(ws), img.view(), None).unwrap();
+    assert_same("after bad inputs", &g, &CpuDetector::new(cfg).unwrap().detect_and_compute(img.view(), None).unwrap());
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
@@ -1486,23 +1060,10 @@ fn an_atlas_over_four_giga_pixels_is_refused() {
     // pixels in the atlas, more than a u32 index reaches. The border leaves
     // few keypoint slots, so only the pixel count is over.
     let Some(ctx) = t::context() else { return };
-    let cfg = Config {
-        n_levels: 32,
-        scale_factor: 1.0001,
-        border: 1024,
-        nms_radius: 32,
-        ..Config::default()
-    };
-    let total = |w: u32, h: u32| -> u64 {
-        cfg.level_sizes(w, h)
-            .iter()
-            .map(|&(a, b)| a as u64 * b as u64)
-            .sum()
-    };
+    let cfg = Config { n_levels: 32, scale_factor: 1.0001, border: 1024, nms_radius: 32, ..Config::default() };
+    let total = |w: u32, h: u32| -> u64 { cfg.level_sizes(w, h).iter().map(|&(a, b)| a as u64 * b as u64).sum() };
     let w = 16384;
-    let h = (8000..16384)
-        .find(|&h| total(w, h) > u32::MAX as u64)
-        .unwrap();
+    let h = (8000..16384).find(|&h| total(w, h) > u32::MAX as u64).unwrap();
     let true_total = total(w, h);
     let layout = lfast::gpu::FrameLayout::new(&cfg, w, h);
     let gpu = GpuDetector::new(ctx, cfg).unwrap();
@@ -1522,10 +1083,7 @@ fn workspace_reuse_across_shrinking_and_growing_sizes() {
     // One workspace through frames that shrink, grow and change shape: every
     // result equals the CPU's and a fresh workspace's, bit for bit.
     let Some(ctx) = t::context() else { return };
-    let cfg = Config {
-        n_levels: 5,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 5, ..Config::default() };
     let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
     let cpu = CpuDetector::new(cfg.clone()).unwrap();
     let mut ws: Option<GpuWorkspace> = None;
@@ -1544,11 +1102,7 @@ fn workspace_reuse_across_shrinking_and_growing_sizes() {
     let mut reused = Vec::new();
     let mut prev: Option<wgpu::Buffer> = None;
     for (i, &(w, h)) in sizes.iter().enumerate() {
-        let content = if i % 2 == 0 {
-            Content::Structured(i as u32)
-        } else {
-            Content::Blocks(i as u32)
-        };
+        let content = if i % 2 == 0 { Content::Structured(i as u32) } else { Content::Blocks(i as u32) };
         let img = render(&content, w, h);
         gpu.prepare_workspace(&mut ws, w, h).unwrap();
         let b = &ws.as_ref().unwrap().buffers;
@@ -1559,43 +1113,23 @@ fn workspace_reuse_across_shrinking_and_growing_sizes() {
         let c = cpu.detect_and_compute(img.view(), None).unwrap();
         assert_same(&format!("step {i}: {w}x{h}"), &g, &c);
         let e = gpu.edge_image(&mut ws, img.view()).unwrap();
-        assert_eq!(
-            e.data,
-            cpu.edge_image(img.view()).unwrap().data,
-            "step {i}: edges of {w}x{h}"
-        );
+        assert_eq!(e.data, cpu.edge_image(img.view()).unwrap().data, "step {i}: edges of {w}x{h}");
         // a fresh workspace gives the same bits: nothing left over from larger frames
         let f = gpu.detect_and_compute(&mut None, img.view(), None).unwrap();
-        identical(&format!("step {i}: {w}x{h} reused vs fresh"), &f, &g)
-            .unwrap_or_else(|e| panic!("{e}"));
+        identical(&format!("step {i}: {w}x{h} reused vs fresh"), &f, &g).unwrap_or_else(|e| panic!("{e}"));
     }
-    eprintln!(
-        "buffers reused at each step: {:?}",
-        sizes.iter().zip(&reused).collect::<Vec<_>>()
-    );
+    eprintln!("buffers reused at each step: {:?}", sizes.iter().zip(&reused).collect::<Vec<_>>());
 }
 
 #[test]
 fn shrinking_frames_reuse_the_buffers() {
     // prepare_workspace: "reallocated only when the frame grew".
     let Some(ctx) = t::context() else { return };
-    let cfg = Config {
-        n_levels: 5,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 5, ..Config::default() };
     let gpu = GpuDetector::new(ctx, cfg.clone()).unwrap();
     let cpu = CpuDetector::new(cfg).unwrap();
     let mut failures = Vec::new();
-    for (w, h) in [
-        (200, 150),
-        (160, 120),
-        (64, 48),
-        (37, 29),
-        (17, 33),
-        (1, 1),
-        (180, 180),
-        (240, 180),
-    ] {
+    for (w, h) in [(200, 150), (160, 120), (64, 48), (37, 29), (17, 33), (1, 1), (180, 180), (240, 180)] {
         let mut ws: Option<GpuWorkspace> = None;
         gpu.prepare_workspace(&mut ws, 240, 180).unwrap();
         let gray = ws.as_ref().unwrap().buffers.gray.clone();
@@ -1615,11 +1149,7 @@ fn shrinking_frames_reuse_the_buffers() {
         // whatever happened, the results are right
         let img = t::test_image(w, h, w + h);
         let g = gpu.detect_and_compute(&mut ws, img.view(), None).unwrap();
-        assert_same(
-            &format!("{w}x{h}"),
-            &g,
-            &cpu.detect_and_compute(img.view(), None).unwrap(),
-        );
+        assert_same(&format!("{w}x{h}"), &g, &cpu.detect_and_compute(img.view(), None).unwrap());
     }
     let first = lfast::gpu::FrameLayout::new(gpu.config(), 240, 180);
     assert!(
@@ -1641,15 +1171,11 @@ fn a_mask_does_not_outlive_its_frame_size() {
     let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
     let cpu = CpuDetector::new(cfg).unwrap();
     let mut failures = Vec::new();
-    for (from, to) in [
-        ((256u32, 256u32), (200u32, 160u32)),
-        ((200, 160), (256, 256)),
-    ] {
+    for (from, to) in [((256u32, 256u32), (200u32, 160u32)), ((200, 160), (256, 256))] {
         let mut ws = None;
         gpu.prepare_workspace(&mut ws, from.0, from.1).unwrap();
         let off = Plane::<u8>::new(from.0, from.1); // all off: no keypoint anywhere
-        gpu.set_mask(ws.as_mut().unwrap(), Some(off.view()))
-            .unwrap();
+        gpu.set_mask(ws.as_mut().unwrap(), Some(off.view())).unwrap();
         gpu.prepare_workspace(&mut ws, to.0, to.1).unwrap();
         let w = ws.as_mut().unwrap();
         let img = t::test_image(to.0, to.1, 17);
@@ -1680,11 +1206,7 @@ fn one_detector_shared_by_threads() {
             let (det, cpu) = (&det, &cpu);
             s.spawn(move || {
                 for i in 0..4u32 {
-                    let (w, h) = if (i + k) % 2 == 0 {
-                        (120, 90)
-                    } else {
-                        (97, 131)
-                    };
+                    let (w, h) = if (i + k) % 2 == 0 { (120, 90) } else { (97, 131) };
                     let img = t::test_image(w, h, 40 + 10 * k + i);
                     assert_eq!(
                         det.detect_and_compute(img.view(), None).unwrap(),

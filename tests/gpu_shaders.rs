@@ -26,7 +26,13 @@ fn every_shader_validates_and_has_an_entry_point() {
         );
         for e in &m.entry_points {
             let [x, y, z] = e.workgroup_size;
-            assert!(x * y * z <= 256, "{}::{}: workgroup of {} invocations exceeds wgpu's default limit", s.name, e.name, x * y * z);
+            assert!(
+                x * y * z <= 256,
+                "{}::{}: workgroup of {} invocations exceeds wgpu's default limit",
+                s.name,
+                e.name,
+                x * y * z
+            );
         }
     }
 }
@@ -55,7 +61,9 @@ fn reflected_bindings_match_the_pass_structs() {
         let mut declared: Vec<(u32, String, Slot)> = s
             .bindings
             .iter()
-            .map(|b| (b.binding, b.name.to_string(), if b.slot == Slot::UniformDynamic { Slot::Uniform } else { b.slot }))
+            .map(|b| {
+                (b.binding, b.name.to_string(), if b.slot == Slot::UniformDynamic { Slot::Uniform } else { b.slot })
+            })
             .collect();
         declared.sort_by_key(|f| f.0);
         assert_eq!(found, declared, "{}: shader bindings vs src/gpu/{}.rs BINDINGS", s.name, s.name);

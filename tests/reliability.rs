@@ -16,8 +16,8 @@ mod fuzz_cases;
 
 use lfast::cpu::CpuDetector;
 use lfast::gpu::detector::{GpuDetector, GpuWorkspace};
-use lfast::testing as t;
 use lfast::image::load_gray;
+use lfast::testing as t;
 use lfast::{Backend, Config, Detector, Error, GrayView, KeyPoint, Mode, Plane};
 use std::path::{Path, PathBuf};
 
@@ -35,13 +35,7 @@ fn noise(w: u32, h: u32, seed: u32) -> Plane<u8> {
 }
 
 fn checker(w: u32, h: u32, cell: u32) -> Plane<u8> {
-    plane(w, h, |x, y| {
-        if (x / cell + y / cell).is_multiple_of(2) {
-            0
-        } else {
-            255
-        }
-    })
+    plane(w, h, |x, y| if (x / cell + y / cell).is_multiple_of(2) { 0 } else { 255 })
 }
 
 fn cpu(cfg: &Config) -> CpuDetector {
@@ -50,12 +44,7 @@ fn cpu(cfg: &Config) -> CpuDetector {
 
 /// The smallest border and NMS window, few levels: corners possible from 15x15 on.
 fn tight() -> Config {
-    Config {
-        border: 7,
-        nms_radius: 1,
-        n_levels: 3,
-        ..Config::default()
-    }
+    Config { border: 7, nms_radius: 1, n_levels: 3, ..Config::default() }
 }
 
 type Features = (Vec<KeyPoint>, Vec<[u8; 32]>);
@@ -69,53 +58,30 @@ struct Gpu {
 impl Gpu {
     fn new(cfg: &Config) -> Option<Self> {
         let ctx = t::context()?;
-        Some(Self {
-            det: GpuDetector::new(ctx, cfg.clone()).unwrap(),
-            ws: None,
-        })
+        Some(Self { det: GpuDetector::new(ctx, cfg.clone()).unwrap(), ws: None })
     }
 
     /// Asserts the GPU's keypoints, descriptors and edge map equal `cpu`'s.
-    fn assert_equals_cpu(
-        &mut self,
-        cpu: &CpuDetector,
-        img: &Plane<u8>,
-        mask: Option<GrayView<'_>>,
-        what: &str,
-    ) {
-        let g = self
-            .det
-            .detect_and_compute(&mut self.ws, img.view(), mask)
-            .unwrap_or_else(|e| panic!("{what}: GPU: {e}"));
+    fn assert_equals_cpu(&mut self, cpu: &CpuDetector, img: &Plane<u8>, mask: Option<GrayView<'_>>, what: &str) {
+        let g =
+            self.det.detect_and_compute(&mut self.ws, img.view(), mask).unwrap_or_else(|e| panic!("{what}: GPU: {e}"));
         let c = cpu.detect_and_compute(img.view(), mask).unwrap();
         assert_eq!(g.keypoints, c.0, "{what}: keypoints GPU vs CPU");
         assert_eq!(g.descriptors, c.1, "{what}: descriptors GPU vs CPU");
-        let ge = self
-            .det
-            .edge_image(&mut self.ws, img.view())
-            .unwrap_or_else(|e| panic!("{what}: GPU edges: {e}"));
-        assert_eq!(
-            ge,
-            cpu.edge_image(img.view()).unwrap(),
-            "{what}: edge map GPU vs CPU"
-        );
+        let ge = self.det.edge_image(&mut self.ws, img.view()).unwrap_or_else(|e| panic!("{what}: GPU edges: {e}"));
+        assert_eq!(ge, cpu.edge_image(img.view()).unwrap(), "{what}: edge map GPU vs CPU");
     }
 }
 
 /// The level pixel (x, y) of an L-FAST keypoint: pt = ((x + 0.5) s, (y + 0.5) s).
 fn level_xy(k: &KeyPoint, scale_factor: f64) -> (u32, u32) {
     let s = scale_factor.powi(k.octave);
-    (
-        (k.pt.x as f64 / s).floor() as u32,
-        (k.pt.y as f64 / s).floor() as u32,
-    )
+    ((k.pt.x as f64 / s).floor() as u32, (k.pt.y as f64 / s).floor() as u32)
 }
 
 /// Whether some level of a `w x h` image has a pixel `border` from every side.
 fn has_interior_level(cfg: &Config, w: u32, h: u32) -> bool {
-    cfg.level_sizes(w, h)
-        .iter()
-        .any(|&(lw, lh)| lw > 2 * cfg.border && lh > 2 * cfg.border)
+    cfg.level_sizes(w, h).iter().any(|&(lw, lh)| lw > 2 * cfg.border && lh > 2 * cfg.border)
 }
 
 fn is_invalid_image(r: lfast::Result<impl std::fmt::Debug>) -> bool {
@@ -134,10 +100,7 @@ fn empty_images_are_invalid_image_errors_on_every_entry_point() {
     for (w, h) in [(0, 0), (0, 7), (7, 0)] {
         let e = GrayView::new(w, h, w as usize, &[]).unwrap_err();
         assert!(matches!(e, Error::InvalidImage { .. }), "{w}x{h}: {e:?}");
-        assert!(
-            e.to_string().contains("empty") && e.to_string().contains(&format!("{w}x{h}")),
-            "{e}"
-        );
+        assert!(e.to_string().contains("empty") && e.to_string().contains(&format!("{w}x{h}")), "{e}");
         let p = Plane::<u8>::new(w, h);
         let v = p.view();
         assert!(is_invalid_image(c.detect_and_compute(v, None)), "{w}x{h}");
@@ -146,22 +109,12 @@ fn empty_images_are_invalid_image_errors_on_every_entry_point() {
         assert!(is_invalid_image(c.edges(v)), "{w}x{h}");
         assert!(is_invalid_image(c.compute(v, &[])), "{w}x{h}");
         for d in [&auto, &on_cpu] {
-            assert!(
-                is_invalid_image(d.detect_and_compute(v, None)),
-                "{w}x{h} {}",
-                d.backend_name()
-            );
+            assert!(is_invalid_image(d.detect_and_compute(v, None)), "{w}x{h} {}", d.backend_name());
             assert!(is_invalid_image(d.edge_image(v)), "{w}x{h}");
         }
         if let Some(g) = gpu.as_mut() {
-            assert!(
-                is_invalid_image(g.det.workspace(w, h).map(|_| ())),
-                "{w}x{h} workspace"
-            );
-            assert!(
-                is_invalid_image(g.det.detect_and_compute(&mut g.ws, v, None).map(|_| ())),
-                "{w}x{h}"
-            );
+            assert!(is_invalid_image(g.det.workspace(w, h).map(|_| ())), "{w}x{h} workspace");
+            assert!(is_invalid_image(g.det.detect_and_compute(&mut g.ws, v, None).map(|_| ())), "{w}x{h}");
             assert!(is_invalid_image(g.det.edge_image(&mut g.ws, v)), "{w}x{h}");
         }
     }
@@ -171,15 +124,7 @@ fn empty_images_are_invalid_image_errors_on_every_entry_point() {
 fn every_size_from_1x1_to_15x15_gives_an_empty_result() {
     // Default border 16: no pixel of any level is 16 from every side of a
     // 15x15 image. With border 7 only a 15-pixel side has one interior pixel.
-    let configs = [
-        Config::default(),
-        Config {
-            border: 7,
-            nms_radius: 1,
-            n_levels: 8,
-            ..Config::default()
-        },
-    ];
+    let configs = [Config::default(), Config { border: 7, nms_radius: 1, n_levels: 8, ..Config::default() }];
     let mut found = 0;
     for cfg in &configs {
         let c = cpu(cfg);
@@ -188,16 +133,8 @@ fn every_size_from_1x1_to_15x15_gives_an_empty_result() {
             for h in 1..=15 {
                 let sizes = cfg.level_sizes(w, h);
                 assert_eq!(sizes.len(), cfg.n_levels as usize);
-                assert!(
-                    sizes
-                        .iter()
-                        .all(|&(lw, lh)| lw >= 1 && lh >= 1 && lw <= w && lh <= h),
-                    "{w}x{h}: {sizes:?}"
-                );
-                for (name, img) in [
-                    ("noise", noise(w, h, w * 31 + h)),
-                    ("checker", checker(w, h, 3)),
-                ] {
+                assert!(sizes.iter().all(|&(lw, lh)| lw >= 1 && lh >= 1 && lw <= w && lh <= h), "{w}x{h}: {sizes:?}");
+                for (name, img) in [("noise", noise(w, h, w * 31 + h)), ("checker", checker(w, h, 3))] {
                     let what = format!("{w}x{h} {name} border {}", cfg.border);
                     let (kps, desc) = c.detect_and_compute(img.view(), None).unwrap();
                     assert_eq!(kps.len(), desc.len(), "{what}");
@@ -209,11 +146,7 @@ fn every_size_from_1x1_to_15x15_gives_an_empty_result() {
                     let e = c.edge_image(img.view()).unwrap();
                     assert_eq!((e.width, e.height), (w, h), "{what}");
                     assert!(e.data.iter().all(|&v| v == 0 || v == 255), "{what}");
-                    assert_eq!(
-                        e,
-                        c.edges(img.view()).unwrap().edges,
-                        "{what}: fused vs staged"
-                    );
+                    assert_eq!(e, c.edges(img.view()).unwrap().edges, "{what}: fused vs staged");
                     if let Some(g) = gpu.as_mut()
                         && (w == h || w == 1 || h == 1 || (w + h) % 4 == 0)
                     {
@@ -240,11 +173,7 @@ fn strips_one_or_two_pixels_thick_give_empty_results() {
             assert!(kps.is_empty() && desc.is_empty(), "{what}");
             let e = c.edge_image(img.view()).unwrap();
             assert_eq!((e.width, e.height), (w, h), "{what}");
-            assert_eq!(
-                e,
-                c.edges(img.view()).unwrap().edges,
-                "{what}: fused vs staged"
-            );
+            assert_eq!(e, c.edges(img.view()).unwrap().edges, "{what}: fused vs staged");
             if let Some(g) = gpu.as_mut()
                 && n <= 1000
             {
@@ -254,32 +183,20 @@ fn strips_one_or_two_pixels_thick_give_empty_results() {
     }
     // a strip over the side limit is refused, not processed
     let long = vec![0u8; lfast::image::MAX_SIDE as usize + 1];
-    assert!(is_invalid_image(GrayView::new(
-        lfast::image::MAX_SIDE + 1,
-        1,
-        long.len(),
-        &long
-    )));
+    assert!(is_invalid_image(GrayView::new(lfast::image::MAX_SIDE + 1, 1, long.len(), &long)));
 }
 
 #[test]
 fn pyramid_levels_that_shrink_below_the_border_are_skipped() {
     // 20 levels of 1.2 on 200x150: level 8 (47x35) is the last with a pixel
     // 16 from every side; levels down to 6x5 exist and must not break anything.
-    let cfg = Config {
-        n_levels: 20,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 20, ..Config::default() };
     let img = t::test_image(200, 150, 7);
     let sizes = cfg.level_sizes(200, 150);
     assert_eq!(sizes[5], (80, 60));
     assert_eq!(sizes[19], (6, 5));
     let last_interior = sizes.iter().rposition(|&(w, h)| w > 32 && h > 32).unwrap();
-    assert_eq!(
-        (last_interior, sizes[8], sizes[9]),
-        (8, (47, 35), (39, 29)),
-        "{sizes:?}"
-    );
+    assert_eq!((last_interior, sizes[8], sizes[9]), (8, (47, 35), (39, 29)), "{sizes:?}");
     let c = cpu(&cfg);
     let (kps, _) = c.detect_and_compute(img.view(), None).unwrap();
     assert!(!kps.is_empty());
@@ -288,23 +205,11 @@ fn pyramid_levels_that_shrink_below_the_border_are_skipped() {
         let (lw, lh) = sizes[k.octave as usize];
         let (x, y) = level_xy(k, cfg.scale_factor);
         assert!(k.octave as usize <= last_interior, "{k:?}");
-        assert!(
-            x >= cfg.border && y >= cfg.border && x < lw - cfg.border && y < lh - cfg.border,
-            "{k:?} on {lw}x{lh}"
-        );
+        assert!(x >= cfg.border && y >= cfg.border && x < lw - cfg.border && y < lh - cfg.border, "{k:?} on {lw}x{lh}");
     }
     // the levels that exist give the same keypoints as the shallower pyramid
-    let shallow = Config {
-        n_levels: 9,
-        ..Config::default()
-    };
-    assert_eq!(
-        cpu(&shallow)
-            .detect_and_compute(img.view(), None)
-            .unwrap()
-            .0,
-        kps
-    );
+    let shallow = Config { n_levels: 9, ..Config::default() };
+    assert_eq!(cpu(&shallow).detect_and_compute(img.view(), None).unwrap().0, kps);
     if let Some(mut g) = Gpu::new(&cfg) {
         g.assert_equals_cpu(&c, &img, None, "200x150, 20 levels");
     }
@@ -320,20 +225,10 @@ fn flat_images_have_no_otsu_threshold_no_edges_and_no_keypoints() {
     for v in [0u8, 255, 1, 128, 254] {
         let img = plane(96, 64, |_, _| v);
         let em = c.edges(img.view()).unwrap();
-        assert_eq!(
-            em.t1(),
-            None,
-            "gray {v}: one histogram bin, Otsu is degenerate"
-        );
+        assert_eq!(em.t1(), None, "gray {v}: one histogram bin, Otsu is degenerate");
         assert!(em.magnitude().data.iter().all(|&m| m == 0), "gray {v}");
         assert!(em.edges.data.iter().all(|&e| e == 0), "gray {v}");
-        assert!(
-            c.edge_image(img.view())
-                .unwrap()
-                .data
-                .iter()
-                .all(|&e| e == 0)
-        );
+        assert!(c.edge_image(img.view()).unwrap().data.iter().all(|&e| e == 0));
         assert!(c.detect(img.view(), None).unwrap().is_empty(), "gray {v}");
         if let Some(g) = gpu.as_mut() {
             g.assert_equals_cpu(&c, &img, None, &format!("flat {v}"));
@@ -353,10 +248,7 @@ fn pure_noise_runs_and_is_reproducible() {
     let first = c.detect_and_compute(img.view(), None).unwrap();
     fuzz_cases::check_keypoints(&first.0, &cfg, 160, 120, "noise");
     assert_eq!(c.detect_and_compute(img.view(), None).unwrap(), first);
-    assert_eq!(
-        cpu(&cfg).detect_and_compute(img.view(), None).unwrap(),
-        first
-    );
+    assert_eq!(cpu(&cfg).detect_and_compute(img.view(), None).unwrap(), first);
     if let Some(mut g) = Gpu::new(&cfg) {
         g.assert_equals_cpu(&c, &img, None, "noise");
     }
@@ -366,11 +258,7 @@ fn pure_noise_runs_and_is_reproducible() {
 fn checkerboard_edges_lie_on_the_cell_boundaries_and_corners_on_the_junctions() {
     let cell = 16;
     let img = checker(128, 128, cell);
-    let one_level = |mode| Config {
-        mode,
-        n_levels: 1,
-        ..Config::default()
-    };
+    let one_level = |mode| Config { mode, n_levels: 1, ..Config::default() };
     let c = cpu(&one_level(Mode::Paper));
     let e = c.edge_image(img.view()).unwrap();
     // the gradient of pixel x lies between x and x+1: a step at 16k sits at x = 16k - 1
@@ -380,10 +268,7 @@ fn checkerboard_edges_lie_on_the_cell_boundaries_and_corners_on_the_junctions() 
         for x in 0..128 {
             if e.at(x, y) != 0 {
                 n += 1;
-                assert!(
-                    on_boundary(x) || on_boundary(y),
-                    "edge pixel ({x},{y}) off the cell boundaries"
-                );
+                assert!(on_boundary(x) || on_boundary(y), "edge pixel ({x},{y}) off the cell boundaries");
             }
         }
     }
@@ -392,46 +277,20 @@ fn checkerboard_edges_lie_on_the_cell_boundaries_and_corners_on_the_junctions() 
     // Paper mode: corners at the junctions (16i, 16j), within the radius 3
     // of the L-FAST circle (every edge pixel on it counts in this mode)
     let kps = c.detect(img.view(), None).unwrap();
-    assert!(
-        kps.len() >= 25,
-        "{} corners on 49 inner junctions",
-        kps.len()
-    );
+    assert!(kps.len() >= 25, "{} corners on 49 inner junctions", kps.len());
     for k in &kps {
         let d = |v: f32| (v - (v / cell as f32).round() * cell as f32).abs();
-        assert!(
-            d(k.pt.x) <= 3.0 && d(k.pt.y) <= 3.0,
-            "corner away from a junction: {k:?}"
-        );
+        assert!(d(k.pt.x) <= 3.0 && d(k.pt.y) <= 3.0, "corner away from a junction: {k:?}");
     }
     // Branch mode: an X junction is two straight lines crossing, no corner (SPEC 8)
-    assert!(
-        cpu(&one_level(Mode::Branch))
-            .detect(img.view(), None)
-            .unwrap()
-            .is_empty()
-    );
+    assert!(cpu(&one_level(Mode::Branch)).detect(img.view(), None).unwrap().is_empty());
     // a single bright rectangle on black: exactly its 4 corners, in both modes
-    let rect = plane(128, 96, |x, y| {
-        if (40..90).contains(&x) && (30..70).contains(&y) {
-            255
-        } else {
-            0
-        }
-    });
+    let rect = plane(128, 96, |x, y| if (40..90).contains(&x) && (30..70).contains(&y) { 255 } else { 0 });
     for mode in [Mode::Branch, Mode::Paper] {
-        let mut pts: Vec<(f32, f32)> = cpu(&one_level(mode))
-            .detect(rect.view(), None)
-            .unwrap()
-            .iter()
-            .map(|k| (k.pt.x, k.pt.y))
-            .collect();
+        let mut pts: Vec<(f32, f32)> =
+            cpu(&one_level(mode)).detect(rect.view(), None).unwrap().iter().map(|k| (k.pt.x, k.pt.y)).collect();
         pts.sort_by(|a, b| a.partial_cmp(b).unwrap());
-        assert_eq!(
-            pts,
-            vec![(39.5, 29.5), (39.5, 69.5), (89.5, 29.5), (89.5, 69.5)],
-            "{mode:?}"
-        );
+        assert_eq!(pts, vec![(39.5, 29.5), (39.5, 69.5), (89.5, 29.5), (89.5, 69.5)], "{mode:?}");
     }
     for cfg in [one_level(Mode::Paper), Config::default()] {
         if let Some(mut g) = Gpu::new(&cfg) {
@@ -445,19 +304,9 @@ fn checkerboard_edges_lie_on_the_cell_boundaries_and_corners_on_the_junctions() 
 fn maximum_contrast_stripes_are_straight_edges_without_corners() {
     for vertical in [true, false] {
         let period = 8;
-        let img = plane(128, 96, |x, y| {
-            if ((if vertical { x } else { y }) / (period / 2)) % 2 == 0 {
-                0
-            } else {
-                255
-            }
-        });
+        let img = plane(128, 96, |x, y| if ((if vertical { x } else { y }) / (period / 2)) % 2 == 0 { 0 } else { 255 });
         for mode in [Mode::Branch, Mode::Paper] {
-            let cfg = Config {
-                mode,
-                n_levels: 1,
-                ..Config::default()
-            };
+            let cfg = Config { mode, n_levels: 1, ..Config::default() };
             let c = cpu(&cfg);
             let e = c.edge_image(img.view()).unwrap();
             for y in 0..96 {
@@ -468,22 +317,13 @@ fn maximum_contrast_stripes_are_straight_edges_without_corners() {
                 }
             }
             let kps = c.detect(img.view(), None).unwrap();
-            assert!(
-                kps.is_empty(),
-                "{mode:?}: straight lines are no corners: {:?}",
-                &kps[..kps.len().min(3)]
-            );
+            assert!(kps.is_empty(), "{mode:?}: straight lines are no corners: {:?}", &kps[..kps.len().min(3)]);
         }
         // On the full pyramid, levels 4 and 5 alias the 4-pixel stripes into
         // blobs that do have corners; the GPU must agree there too.
         let cfg = Config::default();
         if let Some(mut g) = Gpu::new(&cfg) {
-            g.assert_equals_cpu(
-                &cpu(&cfg),
-                &img,
-                None,
-                &format!("stripes vertical {vertical}"),
-            );
+            g.assert_equals_cpu(&cpu(&cfg), &img, None, &format!("stripes vertical {vertical}"));
         }
     }
 }
@@ -496,11 +336,7 @@ fn crc32(bytes: &[u8]) -> u32 {
     for &b in bytes {
         c ^= b as u32;
         for _ in 0..8 {
-            c = if c & 1 != 0 {
-                0xEDB8_8320 ^ (c >> 1)
-            } else {
-                c >> 1
-            };
+            c = if c & 1 != 0 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
         }
     }
     !c
@@ -509,11 +345,7 @@ fn crc32(bytes: &[u8]) -> u32 {
 /// A zlib stream of stored (uncompressed) deflate blocks.
 fn zlib_stored(raw: &[u8]) -> Vec<u8> {
     let mut z = vec![0x78, 0x01];
-    let blocks: Vec<&[u8]> = if raw.is_empty() {
-        vec![&[]]
-    } else {
-        raw.chunks(65535).collect()
-    };
+    let blocks: Vec<&[u8]> = if raw.is_empty() { vec![&[]] } else { raw.chunks(65535).collect() };
     for (i, b) in blocks.iter().enumerate() {
         z.push((i + 1 == blocks.len()) as u8);
         z.extend((b.len() as u16).to_le_bytes());
@@ -530,14 +362,7 @@ fn zlib_stored(raw: &[u8]) -> Vec<u8> {
 }
 
 /// A PNG from its parts: IHDR fields, extra chunks before IDAT, raw scanlines.
-fn png(
-    w: u32,
-    h: u32,
-    depth: u8,
-    colour: u8,
-    chunks: &[(&[u8; 4], Vec<u8>)],
-    scanlines: &[u8],
-) -> Vec<u8> {
+fn png(w: u32, h: u32, depth: u8, colour: u8, chunks: &[(&[u8; 4], Vec<u8>)], scanlines: &[u8]) -> Vec<u8> {
     fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
         out.extend((data.len() as u32).to_be_bytes());
         let start = out.len();
@@ -565,11 +390,7 @@ fn luma(r: u8, g: u8, b: u8) -> u8 {
 
 /// RGB colours of a test image: every pixel a different mix.
 fn rgb_at(x: u32, y: u32) -> [u8; 3] {
-    [
-        (x * 37 + y * 11) as u8,
-        (x * 5 + y * 53) as u8,
-        (255 - x * 17 - y * 3) as u8,
-    ]
+    [(x * 37 + y * 11) as u8, (x * 5 + y * 53) as u8, (255 - x * 17 - y * 3) as u8]
 }
 
 #[test]
@@ -592,20 +413,11 @@ fn every_colour_type_decodes_to_the_spec0_gray() {
     };
 
     // 16-bit gray: v >> 8, the low byte must not matter
-    let g16 = ImageBuffer::from_fn(w, h, |x, y| {
-        Luma([((x * 11 + y * 7) as u16) << 8 | (x * 3) as u16 & 0xff])
-    });
+    let g16 = ImageBuffer::from_fn(w, h, |x, y| Luma([((x * 11 + y * 7) as u16) << 8 | (x * 3) as u16 & 0xff]));
     g16.save(dir.path().join("gray16.png")).unwrap();
-    check(
-        "gray16.png",
-        &(0..w * h)
-            .map(|i| ((i % w) * 11 + (i / w) * 7) as u8)
-            .collect::<Vec<_>>(),
-    );
+    check("gray16.png", &(0..w * h).map(|i| ((i % w) * 11 + (i / w) * 7) as u8).collect::<Vec<_>>());
     // RGB, RGBA (alpha ignored), gray + alpha (gray kept)
-    ImageBuffer::from_fn(w, h, |x, y| Rgb(rgb_at(x, y)))
-        .save(dir.path().join("rgb.png"))
-        .unwrap();
+    ImageBuffer::from_fn(w, h, |x, y| Rgb(rgb_at(x, y))).save(dir.path().join("rgb.png")).unwrap();
     check("rgb.png", &want_rgb);
     ImageBuffer::from_fn(w, h, |x, y| {
         let [r, g, b] = rgb_at(x, y);
@@ -617,36 +429,19 @@ fn every_colour_type_decodes_to_the_spec0_gray() {
     ImageBuffer::from_fn(w, h, |x, y| LumaA([(x * 9 + y) as u8, 255 - (y * 5) as u8]))
         .save(dir.path().join("la.png"))
         .unwrap();
-    check(
-        "la.png",
-        &(0..w * h)
-            .map(|i| ((i % w) * 9 + i / w) as u8)
-            .collect::<Vec<_>>(),
-    );
+    check("la.png", &(0..w * h).map(|i| ((i % w) * 9 + i / w) as u8).collect::<Vec<_>>());
     // 16-bit RGBA: v >> 8 per channel, then the luma
     ImageBuffer::from_fn(w, h, |x, y| {
         let [r, g, b] = rgb_at(x, y);
-        Rgba([
-            (r as u16) << 8 | 0xff,
-            (g as u16) << 8 | 0x80,
-            (b as u16) << 8,
-            0x1234,
-        ])
+        Rgba([(r as u16) << 8 | 0xff, (g as u16) << 8 | 0x80, (b as u16) << 8, 0x1234])
     })
     .save(dir.path().join("rgba16.png"))
     .unwrap();
     check("rgba16.png", &want_rgb);
 
     // palette PNG (8-bit indices into a 7-colour PLTE), with and without tRNS
-    let pal: Vec<[u8; 3]> = vec![
-        [0, 0, 0],
-        [255, 255, 255],
-        [255, 0, 0],
-        [0, 255, 0],
-        [0, 0, 255],
-        [12, 200, 77],
-        [250, 128, 7],
-    ];
+    let pal: Vec<[u8; 3]> =
+        vec![[0, 0, 0], [255, 255, 255], [255, 0, 0], [0, 255, 0], [0, 0, 255], [12, 200, 77], [250, 128, 7]];
     let index = |x: u32, y: u32| ((x + 2 * y) % pal.len() as u32) as u8;
     let mut lines = Vec::new();
     for y in 0..h {
@@ -660,37 +455,21 @@ fn every_colour_type_decodes_to_the_spec0_gray() {
             luma(r, g, b)
         })
         .collect();
-    std::fs::write(
-        dir.path().join("palette.png"),
-        png(w, h, 8, 3, &[(b"PLTE", plte.clone())], &lines),
-    )
-    .unwrap();
+    std::fs::write(dir.path().join("palette.png"), png(w, h, 8, 3, &[(b"PLTE", plte.clone())], &lines)).unwrap();
     check("palette.png", &want_pal);
     std::fs::write(
         dir.path().join("palette_trns.png"),
-        png(
-            w,
-            h,
-            8,
-            3,
-            &[(b"PLTE", plte), (b"tRNS", vec![0, 128, 255])],
-            &lines,
-        ),
+        png(w, h, 8, 3, &[(b"PLTE", plte), (b"tRNS", vec![0, 128, 255])], &lines),
     )
     .unwrap();
     check("palette_trns.png", &want_pal);
 
     // JPEG is lossy: the gray is SPEC 0 of what the decoder returns
     for (name, img) in [
-        (
-            "rgb.jpg",
-            image::DynamicImage::ImageRgb8(ImageBuffer::from_fn(w, h, |x, y| Rgb(rgb_at(x, y)))),
-        ),
+        ("rgb.jpg", image::DynamicImage::ImageRgb8(ImageBuffer::from_fn(w, h, |x, y| Rgb(rgb_at(x, y))))),
         (
             "gray.jpeg",
-            image::DynamicImage::ImageLuma8(ImageBuffer::from_fn(w, h, |x, y| {
-                Luma([(x * 9 + y * 4) as u8])
-            })),
+            image::DynamicImage::ImageLuma8(ImageBuffer::from_fn(w, h, |x, y| Luma([(x * 9 + y * 4) as u8]))),
         ),
     ] {
         let p = dir.path().join(name);
@@ -698,11 +477,7 @@ fn every_colour_type_decodes_to_the_spec0_gray() {
         let decoded = image::open(&p).unwrap();
         let want: Vec<u8> = match &decoded {
             image::DynamicImage::ImageLuma8(b) => b.as_raw().clone(),
-            other => other
-                .to_rgb8()
-                .pixels()
-                .map(|p| luma(p.0[0], p.0[1], p.0[2]))
-                .collect(),
+            other => other.to_rgb8().pixels().map(|p| luma(p.0[0], p.0[1], p.0[2])).collect(),
         };
         check(name, &want);
     }
@@ -721,10 +496,7 @@ fn assert_load_fails(p: &Path, what: &str) -> Error {
         other => panic!("{what}: {other:?}"),
     }
     let name = p.file_name().unwrap().to_string_lossy().into_owned();
-    assert!(
-        e.to_string().contains(&name),
-        "{what}: the message names the file: {e}"
-    );
+    assert!(e.to_string().contains(&name), "{what}: the message names the file: {e}");
     e
 }
 
@@ -741,10 +513,7 @@ fn broken_and_non_image_files_are_typed_errors_naming_the_file() {
     }
     // truncated JPEG: header only, and half of the entropy-coded data
     let jpg = d.join("whole.jpg");
-    image::GrayImage::from_raw(64, 48, noise(64, 48, 3).data)
-        .unwrap()
-        .save(&jpg)
-        .unwrap();
+    image::GrayImage::from_raw(64, 48, noise(64, 48, 3).data).unwrap().save(&jpg).unwrap();
     let good_jpg = std::fs::read(&jpg).unwrap();
     for n in [2, 20, 200] {
         let p = d.join(format!("cut_{n}.jpg"));
@@ -759,10 +528,7 @@ fn broken_and_non_image_files_are_typed_errors_naming_the_file() {
     std::fs::create_dir(d.join("frame.png")).unwrap();
     assert_load_fails(&d.join("frame.png"), "directory named .png");
     let e = assert_load_fails(&d.join("missing.png"), "missing path");
-    assert!(
-        matches!(&e, Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound),
-        "{e:?}"
-    );
+    assert!(matches!(&e, Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound), "{e:?}");
 }
 
 /// Whether this process can read a file whose mode is 000 (root, or
@@ -787,13 +553,8 @@ fn unreadable_files_are_io_errors() {
             "{e:?}"
         );
     } else {
-        eprintln!(
-            "note: running privileged (root): mode 000 does not deny reads here; checked with /proc/self/mem"
-        );
-        assert_eq!(
-            load_gray(&p).unwrap(),
-            load_gray(common::data("coins.png")).unwrap()
-        );
+        eprintln!("note: running privileged (root): mode 000 does not deny reads here; checked with /proc/self/mem");
+        assert_eq!(load_gray(&p).unwrap(), load_gray(common::data("coins.png")).unwrap());
     }
     // A file that opens but cannot be read, even by root: /proc/self/mem at
     // offset 0 (unmapped) fails every read with EIO.
@@ -827,11 +588,7 @@ fn huge_declared_sizes_are_refused_by_the_decoding_limits() {
         std::fs::write(&p, png_header_only(w, h, depth, colour)).unwrap();
         assert!(std::fs::metadata(&p).unwrap().len() < 100);
         let e = assert_load_fails(&p, name);
-        let Error::Image {
-            source: image::ImageError::Limits(l),
-            ..
-        } = &e
-        else {
+        let Error::Image { source: image::ImageError::Limits(l), .. } = &e else {
             panic!("{name}: not a limit error: {e:?}")
         };
         let kind = format!("{:?}", l.kind()).to_lowercase();
@@ -846,103 +603,25 @@ fn huge_declared_sizes_are_refused_by_the_decoding_limits() {
 fn nan_infinite_negative_and_zero_values_are_invalid_config_naming_the_field() {
     let d = Config::default;
     let cases: Vec<(&str, Config)> = vec![
-        (
-            "delta",
-            Config {
-                delta: f64::NAN,
-                ..d()
-            },
-        ),
-        (
-            "delta",
-            Config {
-                delta: f64::INFINITY,
-                ..d()
-            },
-        ),
-        (
-            "delta",
-            Config {
-                delta: f64::NEG_INFINITY,
-                ..d()
-            },
-        ),
+        ("delta", Config { delta: f64::NAN, ..d() }),
+        ("delta", Config { delta: f64::INFINITY, ..d() }),
+        ("delta", Config { delta: f64::NEG_INFINITY, ..d() }),
         ("delta", Config { delta: -0.1, ..d() }),
         ("delta", Config { delta: 0.0, ..d() }),
         ("delta", Config { delta: -0.0, ..d() }),
-        (
-            "delta",
-            Config {
-                delta: 0.00004,
-                ..d()
-            },
-        ), // rounds to a zero numerator
-        (
-            "scale_factor",
-            Config {
-                scale_factor: f64::NAN,
-                ..d()
-            },
-        ),
-        (
-            "scale_factor",
-            Config {
-                scale_factor: f64::INFINITY,
-                ..d()
-            },
-        ),
-        (
-            "scale_factor",
-            Config {
-                scale_factor: f64::NEG_INFINITY,
-                ..d()
-            },
-        ),
-        (
-            "scale_factor",
-            Config {
-                scale_factor: -1.2,
-                ..d()
-            },
-        ),
-        (
-            "scale_factor",
-            Config {
-                scale_factor: 0.0,
-                ..d()
-            },
-        ),
-        (
-            "scale_factor",
-            Config {
-                scale_factor: 1.0,
-                ..d()
-            },
-        ),
+        ("delta", Config { delta: 0.00004, ..d() }), // rounds to a zero numerator
+        ("scale_factor", Config { scale_factor: f64::NAN, ..d() }),
+        ("scale_factor", Config { scale_factor: f64::INFINITY, ..d() }),
+        ("scale_factor", Config { scale_factor: f64::NEG_INFINITY, ..d() }),
+        ("scale_factor", Config { scale_factor: -1.2, ..d() }),
+        ("scale_factor", Config { scale_factor: 0.0, ..d() }),
+        ("scale_factor", Config { scale_factor: 1.0, ..d() }),
         ("n_levels", Config { n_levels: 0, ..d() }),
-        (
-            "n_levels",
-            Config {
-                n_levels: 33,
-                ..d()
-            },
-        ),
+        ("n_levels", Config { n_levels: 33, ..d() }),
         ("support", Config { support: 0, ..d() }),
         ("border", Config { border: 0, ..d() }),
-        (
-            "alpha_pct",
-            Config {
-                alpha_pct: 100,
-                ..d()
-            },
-        ),
-        (
-            "orientation_bins",
-            Config {
-                orientation_bins: 361,
-                ..d()
-            },
-        ),
+        ("alpha_pct", Config { alpha_pct: 100, ..d() }),
+        ("orientation_bins", Config { orientation_bins: 361, ..d() }),
     ];
     let ctx = t::context();
     for (field, cfg) in &cases {
@@ -958,16 +637,10 @@ fn nan_infinite_negative_and_zero_values_are_invalid_config_naming_the_field() {
             if b == Backend::Gpu && ctx.is_none() {
                 continue;
             }
-            check(
-                Detector::new(cfg.clone(), b).map(|_| ()),
-                &format!("Detector {b:?}"),
-            );
+            check(Detector::new(cfg.clone(), b).map(|_| ()), &format!("Detector {b:?}"));
         }
         if let Some(ctx) = &ctx {
-            check(
-                GpuDetector::new(ctx.clone(), cfg.clone()).map(|_| ()),
-                "GpuDetector",
-            );
+            check(GpuDetector::new(ctx.clone(), cfg.clone()).map(|_| ()), "GpuDetector");
         }
         let msg = cfg.validate().unwrap_err().to_string();
         assert!(msg.contains(field), "{msg}");
@@ -986,22 +659,13 @@ fn nan_infinite_negative_and_zero_values_are_invalid_config_naming_the_field() {
         }
     }
     // negative integers do not parse into unsigned fields
-    assert!(matches!(
-        Config::from_toml_str("n_levels = -1"),
-        Err(Error::ConfigParse { .. })
-    ));
+    assert!(matches!(Config::from_toml_str("n_levels = -1"), Err(Error::ConfigParse { .. })));
 }
 
 #[test]
 fn n_levels_deeper_than_the_image_is_fine() {
     // 32 levels of 4.0 on 120x90: from level 4 on every level is 1x1
-    let cfg = Config {
-        n_levels: 32,
-        scale_factor: 4.0,
-        border: 7,
-        nms_radius: 1,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 32, scale_factor: 4.0, border: 7, nms_radius: 1, ..Config::default() };
     let sizes = cfg.level_sizes(120, 90);
     assert_eq!(&sizes[..4], &[(120, 90), (30, 23), (8, 6), (2, 1)]);
     assert!(sizes[4..].iter().all(|&s| s == (1, 1)), "{sizes:?}");
@@ -1009,21 +673,10 @@ fn n_levels_deeper_than_the_image_is_fine() {
     let c = cpu(&cfg);
     let (kps, desc) = c.detect_and_compute(img.view(), None).unwrap();
     assert!(!kps.is_empty());
-    assert!(
-        kps.iter().all(|k| k.octave <= 1),
-        "only levels 0 and 1 have interior pixels"
-    );
+    assert!(kps.iter().all(|k| k.octave <= 1), "only levels 0 and 1 have interior pixels");
     assert_eq!(c.compute(img.view(), &kps).unwrap(), desc);
     // the same keypoints as the two levels that matter
-    assert_eq!(
-        cpu(&Config {
-            n_levels: 2,
-            ..cfg.clone()
-        })
-        .detect_and_compute(img.view(), None)
-        .unwrap(),
-        (kps, desc)
-    );
+    assert_eq!(cpu(&Config { n_levels: 2, ..cfg.clone() }).detect_and_compute(img.view(), None).unwrap(), (kps, desc));
     if let Some(mut g) = Gpu::new(&cfg) {
         g.assert_equals_cpu(&c, &img, None, "32 levels of 4.0");
     }
@@ -1037,61 +690,28 @@ fn masks_of_the_wrong_size_are_mask_size_errors_on_every_backend() {
     let auto = Detector::new(cfg.clone(), Backend::Auto).unwrap();
     let mut gpu = Gpu::new(&cfg);
     for (mw, mh) in [(63, 48), (65, 48), (64, 47), (64, 49), (48, 64), (1, 1)] {
-        let m = Plane {
-            width: mw,
-            height: mh,
-            data: vec![255u8; (mw * mh) as usize],
-        };
+        let m = Plane { width: mw, height: mh, data: vec![255u8; (mw * mh) as usize] };
         let is_mask_size = |r: lfast::Result<()>| matches!(r, Err(Error::MaskSize { mask_width, mask_height, width: 64, height: 48 }) if (mask_width, mask_height) == (mw, mh));
-        assert!(
-            is_mask_size(c.detect(img.view(), Some(m.view())).map(|_| ())),
-            "{mw}x{mh}"
-        );
-        assert!(
-            is_mask_size(c.detect_and_compute(img.view(), Some(m.view())).map(|_| ())),
-            "{mw}x{mh}"
-        );
+        assert!(is_mask_size(c.detect(img.view(), Some(m.view())).map(|_| ())), "{mw}x{mh}");
+        assert!(is_mask_size(c.detect_and_compute(img.view(), Some(m.view())).map(|_| ())), "{mw}x{mh}");
         // Auto must not hide a caller's error by falling back to the CPU
-        assert!(
-            is_mask_size(
-                auto.detect_and_compute(img.view(), Some(m.view()))
-                    .map(|_| ())
-            ),
-            "{mw}x{mh} auto"
-        );
+        assert!(is_mask_size(auto.detect_and_compute(img.view(), Some(m.view())).map(|_| ())), "{mw}x{mh} auto");
         if let Some(g) = gpu.as_mut() {
             assert!(
-                is_mask_size(
-                    g.det
-                        .detect_and_compute(&mut g.ws, img.view(), Some(m.view()))
-                        .map(|_| ())
-                ),
+                is_mask_size(g.det.detect_and_compute(&mut g.ws, img.view(), Some(m.view())).map(|_| ())),
                 "{mw}x{mh} GPU"
             );
         }
-        let e = c
-            .detect(img.view(), Some(m.view()))
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains(&format!("{mw}x{mh}")) && e.contains("64x48"),
-            "{e}"
-        );
+        let e = c.detect(img.view(), Some(m.view())).unwrap_err().to_string();
+        assert!(e.contains(&format!("{mw}x{mh}")) && e.contains("64x48"), "{e}");
     }
     // an inconsistent mask buffer is an image error, not a panic
-    let short = Plane {
-        width: 64,
-        height: 48,
-        data: vec![1u8; 100],
-    };
+    let short = Plane { width: 64, height: 48, data: vec![1u8; 100] };
     assert!(is_invalid_image(c.detect(img.view(), Some(short.view()))));
     // the right size works on every backend and agrees
     let m = plane(64, 48, |x, _| (x > 20) as u8);
     let want = c.detect_and_compute(img.view(), Some(m.view())).unwrap();
-    assert_eq!(
-        auto.detect_and_compute(img.view(), Some(m.view())).unwrap(),
-        want
-    );
+    assert_eq!(auto.detect_and_compute(img.view(), Some(m.view())).unwrap(), want);
     if let Some(g) = gpu.as_mut() {
         g.assert_equals_cpu(&c, &img, Some(m.view()), "mask");
     }
@@ -1103,26 +723,12 @@ fn masks_of_the_wrong_size_are_mask_size_errors_on_every_backend() {
 fn same_input_same_output_across_runs_thread_counts_and_backends() {
     let img = load_gray(common::data("camera_cc0_v0.18plus.png")).unwrap();
     let small = t::test_image(200, 150, 42);
-    for cfg in [
-        Config::default(),
-        Config {
-            mode: Mode::Paper,
-            n_features: 300,
-            ..Config::default()
-        },
-    ] {
+    for cfg in [Config::default(), Config { mode: Mode::Paper, n_features: 300, ..Config::default() }] {
         let run = |threads: usize, img: &Plane<u8>| -> (Features, Plane<u8>) {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let d = cpu(&cfg);
-                    (
-                        d.detect_and_compute(img.view(), None).unwrap(),
-                        d.edge_image(img.view()).unwrap(),
-                    )
-                })
+            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
+                let d = cpu(&cfg);
+                (d.detect_and_compute(img.view(), None).unwrap(), d.edge_image(img.view()).unwrap())
+            })
         };
         for im in [&img, &small] {
             let one = run(1, im);
@@ -1137,11 +743,7 @@ fn same_input_same_output_across_runs_thread_counts_and_backends() {
                 let g = Detector::from_context(ctx, cfg.clone()).unwrap();
                 assert_eq!(g.backend_name(), "gpu");
                 for _ in 0..2 {
-                    assert_eq!(
-                        g.detect_and_compute(im.view(), None).unwrap(),
-                        one.0,
-                        "GPU vs CPU"
-                    );
+                    assert_eq!(g.detect_and_compute(im.view(), None).unwrap(), one.0, "GPU vs CPU");
                     assert_eq!(g.edge_image(im.view()).unwrap(), one.1, "GPU vs CPU edges");
                 }
             }
@@ -1157,11 +759,7 @@ fn regress_inputs(target: &str) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.unwrap().path())
-        .filter(|p| {
-            p.is_file()
-                && p.file_name()
-                    .is_some_and(|n| !n.to_string_lossy().starts_with('.'))
-        })
+        .filter(|p| p.is_file() && p.file_name().is_some_and(|n| !n.to_string_lossy().starts_with('.')))
         .collect();
     v.sort();
     v
@@ -1170,10 +768,7 @@ fn regress_inputs(target: &str) -> Vec<PathBuf> {
 /// Replays one target's inputs; each must pass the target's checks.
 fn replay(target: &str, mut f: impl FnMut(&[u8])) {
     let inputs = regress_inputs(target);
-    assert!(
-        !inputs.is_empty(),
-        "tests/data/regress/{target} has no inputs"
-    );
+    assert!(!inputs.is_empty(), "tests/data/regress/{target} has no inputs");
     for p in &inputs {
         let bytes = std::fs::read(p).unwrap();
         let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(&bytes)));
@@ -1208,12 +803,7 @@ fn fuzz_regressions_cpu_vs_gpu() {
 fn vm_size() -> u64 {
     let s = std::fs::read_to_string("/proc/self/status").unwrap();
     let line = s.lines().find(|l| l.starts_with("VmSize:")).unwrap();
-    line.split_whitespace()
-        .nth(1)
-        .unwrap()
-        .parse::<u64>()
-        .unwrap()
-        * 1024
+    line.split_whitespace().nth(1).unwrap().parse::<u64>().unwrap() * 1024
 }
 
 /// Out of memory on a workspace allocation, for real: the test runs itself
@@ -1229,32 +819,16 @@ fn out_of_memory_on_a_workspace_is_a_typed_error_and_auto_runs_the_frame_on_the_
     let Some(ctx) = t::context() else { return };
     if std::env::var_os(CHILD).is_none() {
         let o = std::process::Command::new(std::env::current_exe().unwrap())
-            .args([
-                "out_of_memory_on_a_workspace",
-                "--exact",
-                "--nocapture",
-                "--test-threads=1",
-            ])
+            .args(["out_of_memory_on_a_workspace", "--exact", "--nocapture", "--test-threads=1"])
             .arg("out_of_memory_on_a_workspace_is_a_typed_error_and_auto_runs_the_frame_on_the_cpu")
             .env(CHILD, "1")
             .output()
             .unwrap();
-        let text = format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        );
-        assert!(
-            o.status.success() && text.contains("oom child: done"),
-            "child: {:?}\n{text}",
-            o.status
-        );
+        let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        assert!(o.status.success() && text.contains("oom child: done"), "child: {:?}\n{text}", o.status);
         return;
     }
-    let cfg = Config {
-        n_levels: 1,
-        ..Config::default()
-    };
+    let cfg = Config { n_levels: 1, ..Config::default() };
     let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
     let auto = Detector::from_context_with_fallback(ctx, cfg.clone()).unwrap();
     let c = cpu(&cfg);
@@ -1263,21 +837,10 @@ fn out_of_memory_on_a_workspace_is_a_typed_error_and_auto_runs_the_frame_on_the_
     let want_small = c.detect_and_compute(small.view(), None).unwrap();
     let want_big = c.detect_and_compute(big.view(), None).unwrap();
     let mut ws = None;
-    assert_eq!(
-        gpu.detect_and_compute(&mut ws, small.view(), None)
-            .unwrap()
-            .keypoints,
-        want_small.0
-    );
-    assert_eq!(
-        auto.detect_and_compute(small.view(), None).unwrap(),
-        want_small
-    );
+    assert_eq!(gpu.detect_and_compute(&mut ws, small.view(), None).unwrap().keypoints, want_small.0);
+    assert_eq!(auto.detect_and_compute(small.view(), None).unwrap(), want_small);
     let cap = vm_size() + (1 << 30);
-    let lim = libc::rlimit {
-        rlim_cur: cap,
-        rlim_max: libc::RLIM_INFINITY,
-    };
+    let lim = libc::rlimit { rlim_cur: cap, rlim_max: libc::RLIM_INFINITY };
     // SAFETY: setrlimit with a valid struct; only this child process is limited.
     assert_eq!(unsafe { libc::setrlimit(libc::RLIMIT_AS, &lim) }, 0);
     eprintln!("oom child: address space capped at {} MiB", cap >> 20);
@@ -1299,20 +862,10 @@ fn out_of_memory_on_a_workspace_is_a_typed_error_and_auto_runs_the_frame_on_the_
     let again = gpu.detect_and_compute(&mut ws, small.view(), None).unwrap();
     assert_eq!((again.keypoints, again.descriptors), want_small);
     // 4000x4000 does not fit on the GPU either; Auto runs it on the CPU
-    assert!(matches!(
-        gpu.workspace(4000, 4000),
-        Err(Error::GpuOutOfMemory { .. })
-    ));
+    assert!(matches!(gpu.workspace(4000, 4000), Err(Error::GpuOutOfMemory { .. })));
     assert_eq!(auto.detect_and_compute(big.view(), None).unwrap(), want_big);
-    assert_eq!(
-        auto.backend_name(),
-        "gpu",
-        "out of memory for one frame is not a device loss"
-    );
-    assert_eq!(
-        auto.detect_and_compute(small.view(), None).unwrap(),
-        want_small
-    );
+    assert_eq!(auto.backend_name(), "gpu", "out of memory for one frame is not a device loss");
+    assert_eq!(auto.detect_and_compute(small.view(), None).unwrap(), want_small);
     eprintln!("oom child: done");
 }
 
@@ -1327,18 +880,14 @@ fn a_refused_device_request_is_an_error_not_a_panic() {
     let Some(ctx) = t::context() else { return };
     let inst = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let adapters = pollster::block_on(inst.enumerate_adapters(wgpu::Backends::all()));
-    let adapter = adapters
-        .into_iter()
-        .find(|a| a.get_info().name == ctx.info.name)
-        .expect("the test adapter");
+    let adapter = adapters.into_iter().find(|a| a.get_info().name == ctx.info.name).expect("the test adapter");
     let mut limits = adapter.limits();
     limits.max_buffer_size = u64::MAX;
     limits.max_compute_workgroups_per_dimension = u32::MAX;
     let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            required_limits: limits,
-            ..Default::default()
-        }))
+        pollster::block_on(
+            adapter.request_device(&wgpu::DeviceDescriptor { required_limits: limits, ..Default::default() }),
+        )
     }));
     match r {
         Ok(Err(e)) => eprintln!("refused: {e}"),

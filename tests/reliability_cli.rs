@@ -16,8 +16,7 @@ use std::time::{Duration, Instant};
 /// A decoder seed kept for the fuzzer: the file without its first byte (which
 /// only picks the fuzzer's file name extension).
 fn seed_file(name: &str) -> Vec<u8> {
-    std::fs::read(common::data("regress/decode_detect").join(format!("seed-{name}"))).unwrap()[1..]
-        .to_vec()
+    std::fs::read(common::data("regress/decode_detect").join(format!("seed-{name}"))).unwrap()[1..].to_vec()
 }
 
 // ------------------------------------------------------------ input files
@@ -53,12 +52,7 @@ fn one_batch_with_every_format_and_every_broken_input() {
     std::fs::write(dir.join("truncated_jpg.jpg"), &jpg[..200]).unwrap();
     std::fs::write(dir.join("empty.png"), b"").unwrap();
     std::fs::write(dir.join("notes.png"), "this is text\n").unwrap();
-    let mut bad = vec![
-        "truncated_png.png",
-        "truncated_jpg.jpg",
-        "empty.png",
-        "notes.png",
-    ];
+    let mut bad = vec!["truncated_png.png", "truncated_jpg.jpg", "empty.png", "notes.png"];
     #[cfg(target_os = "linux")]
     {
         // opens, but every read fails (EIO), even for root
@@ -75,32 +69,15 @@ fn one_batch_with_every_format_and_every_broken_input() {
             bad.push("locked.png");
         } else {
             // root (as in CI): mode 000 does not deny reads, the file is processed
-            eprintln!(
-                "note: privileged: mode 000 does not deny reads; unreadable.png covers the case"
-            );
+            eprintln!("note: privileged: mode 000 does not deny reads; unreadable.png covers the case");
         }
     }
     let missing = tmp.path().join("missing.png");
     let out = tmp.path().join("out");
-    let o = lfast(&[
-        &"detect",
-        &dir,
-        &missing,
-        &"--out",
-        &out,
-        &"--backend",
-        &"cpu",
-        &"--format",
-        &"json,npy",
-    ]);
+    let o = lfast(&[&"detect", &dir, &missing, &"--out", &out, &"--backend", &"cpu", &"--format", &"json,npy"]);
     assert_eq!(o.status.code(), Some(1), "{}", show(&o));
     let n_good = good.len() as u64 + 1 + (!bad.contains(&"locked.png")) as u64;
-    assert_eq!(
-        summary(&o),
-        (n_good, 0, bad.len() as u64 + 1),
-        "{}",
-        show(&o)
-    );
+    assert_eq!(summary(&o), (n_good, 0, bad.len() as u64 + 1), "{}", show(&o));
     let err = stderr(&o);
     for name in bad.iter().chain(&["missing.png"]) {
         let lines: Vec<&str> = err.lines().filter(|l| l.contains(name)).collect();
@@ -109,11 +86,7 @@ fn one_batch_with_every_format_and_every_broken_input() {
     assert_eq!(err.lines().count(), bad.len() + 1, "{err}");
     // every good file's features equal the library's on the same file
     let det = lfast::cpu::CpuDetector::new(lfast::Config::default()).unwrap();
-    for name in good
-        .iter()
-        .map(|n| n.0.to_string())
-        .chain(["frame.png/inner.png".to_string()])
-    {
+    for name in good.iter().map(|n| n.0.to_string()).chain(["frame.png/inner.png".to_string()]) {
         let stem = name.rsplit_once('.').unwrap().0;
         let f = read_features(&out.join(format!("{stem}.json")));
         let g = lfast::image::load_gray(dir.join(&name)).unwrap();
@@ -133,28 +106,15 @@ fn one_batch_with_every_format_and_every_broken_input() {
 fn run_measuring_memory(mut cmd: Command) -> (std::process::ExitStatus, String, i64) {
     use std::io::Read;
     use std::os::unix::process::ExitStatusExt;
-    let mut child = cmd
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = cmd.stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
     let mut err = String::new();
-    child
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut err)
-        .unwrap();
+    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
     let mut status = 0;
     // SAFETY: a zeroed rusage is a valid out-parameter; the pid is our child's.
     let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
     let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
     assert_eq!(pid, child.id() as libc::pid_t, "wait4");
-    (
-        std::process::ExitStatus::from_raw(status),
-        err,
-        usage.ru_maxrss,
-    )
+    (std::process::ExitStatus::from_raw(status), err, usage.ru_maxrss)
 }
 
 #[cfg(unix)]
@@ -171,11 +131,7 @@ fn a_png_declaring_65535x65535_is_refused_without_a_large_allocation() {
         for &b in &ihdr {
             c ^= b as u32;
             for _ in 0..8 {
-                c = if c & 1 != 0 {
-                    0xEDB8_8320 ^ (c >> 1)
-                } else {
-                    c >> 1
-                };
+                c = if c & 1 != 0 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
             }
         }
         !c
@@ -189,26 +145,10 @@ fn a_png_declaring_65535x65535_is_refused_without_a_large_allocation() {
     let good = tmp.path().join("good.png");
     std::fs::write(&good, seed_file("gray8.png")).unwrap();
     let out = tmp.path().join("out");
-    let cmd = command(
-        &[
-            &"detect",
-            &huge,
-            &good,
-            &"--out",
-            &out,
-            &"--backend",
-            &"cpu",
-            &"--jobs",
-            &"1",
-        ],
-        &[],
-    );
+    let cmd = command(&[&"detect", &huge, &good, &"--out", &out, &"--backend", &"cpu", &"--jobs", &"1"], &[]);
     let (status, err, peak_kib) = run_measuring_memory(cmd);
     assert_eq!(status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("huge.png") && err.to_lowercase().contains("limit"),
-        "{err}"
-    );
+    assert!(err.contains("huge.png") && err.to_lowercase().contains("limit"), "{err}");
     assert!(out.join("good.json").is_file());
     // 65535^2 gray pixels would be 4 GiB; refusing them from the header takes
     // no more than the process's usual few tens of MiB
@@ -225,12 +165,7 @@ fn a_frame_over_the_gpu_limits_runs_on_the_cpu_with_a_warning() {
     };
     // One keypoint slot per pixel (no corner NMS, smallest border): the
     // smallest square frame whose slots exceed the storage binding limit.
-    let cfg = lfast::Config {
-        nms_radius: 0,
-        border: 7,
-        n_features: 300,
-        ..Default::default()
-    };
+    let cfg = lfast::Config { nms_radius: 0, border: 7, n_features: 300, ..Default::default() };
     let lim = ctx.device.limits();
     let limit = lim.max_storage_buffer_binding_size.min(lim.max_buffer_size);
     let over = |s: u32| {
@@ -238,9 +173,7 @@ fn a_frame_over_the_gpu_limits_runs_on_the_cpu_with_a_warning() {
         l.capacity as u64 * 48 > limit || l.total_px as u64 * 4 > limit
     };
     let Some(side) = (64..=2048u32).step_by(64).find(|&s| over(s)) else {
-        eprintln!(
-            "NOT RUN: storage bindings of {limit} bytes hold every frame up to 2048x2048 on this device"
-        );
+        eprintln!("NOT RUN: storage bindings of {limit} bytes hold every frame up to 2048x2048 on this device");
         return;
     };
     let tmp = tempfile::tempdir().unwrap();
@@ -253,68 +186,26 @@ fn a_frame_over_the_gpu_limits_runs_on_the_cpu_with_a_warning() {
     let cpu = lfast::cpu::CpuDetector::new(cfg.clone()).unwrap();
     let out = tmp.path().join("out");
     let ins = [tmp.path().join("big.png"), tmp.path().join("small.png")];
-    let o = lfast(&[
-        &"detect",
-        &ins[0],
-        &ins[1],
-        &"--out",
-        &out,
-        &"--config",
-        &toml,
-        &"--backend",
-        &"auto",
-    ]);
+    let o = lfast(&[&"detect", &ins[0], &ins[1], &"--out", &out, &"--config", &toml, &"--backend", &"auto"]);
     assert!(o.status.success(), "{}", show(&o));
     assert!(stdout(&o).contains("backend gpu"), "{}", show(&o));
     let err = stderr(&o);
-    let warn: Vec<&str> = err
-        .lines()
-        .filter(|l| l.starts_with("lfast: warning:"))
-        .collect();
+    let warn: Vec<&str> = err.lines().filter(|l| l.starts_with("lfast: warning:")).collect();
     assert_eq!(warn.len(), 1, "one warning, for the big frame:\n{err}");
-    assert!(
-        warn[0].contains("runs on the CPU") && warn[0].contains(&format!("{side}x{side}")),
-        "{}",
-        warn[0]
-    );
-    assert!(
-        !err.contains("panicked") && !err.contains("Validation"),
-        "{err}"
-    );
+    assert!(warn[0].contains("runs on the CPU") && warn[0].contains(&format!("{side}x{side}")), "{}", warn[0]);
+    assert!(!err.contains("panicked") && !err.contains("Validation"), "{err}");
     for (name, img) in [("big", &big), ("small", &small)] {
         let f = read_features(&out.join(format!("{name}.json")));
         assert_eq!(f.keypoints, cpu.detect(img.view(), None).unwrap(), "{name}");
     }
     // --backend gpu: the big frame is a per-file error naming the limit, the small one is done
     let out2 = tmp.path().join("out2");
-    let o = lfast(&[
-        &"detect",
-        &ins[0],
-        &ins[1],
-        &"--out",
-        &out2,
-        &"--config",
-        &toml,
-        &"--backend",
-        &"gpu",
-    ]);
+    let o = lfast(&[&"detect", &ins[0], &ins[1], &"--out", &out2, &"--config", &toml, &"--backend", &"gpu"]);
     assert_eq!(o.status.code(), Some(1), "{}", show(&o));
     assert_eq!(summary(&o), (1, 0, 1));
-    assert!(
-        stderr(&o).contains("big.png") && stderr(&o).contains("GPU limits"),
-        "{}",
-        show(&o)
-    );
+    assert!(stderr(&o).contains("big.png") && stderr(&o).contains("GPU limits"), "{}", show(&o));
     // --quiet: no warning
-    let o = lfast(&[
-        &"detect",
-        &ins[0],
-        &"--out",
-        &out2,
-        &"--config",
-        &toml,
-        &"--quiet",
-    ]);
+    let o = lfast(&[&"detect", &ins[0], &"--out", &out2, &"--config", &toml, &"--quiet"]);
     assert!(o.status.success() && stderr(&o).is_empty(), "{}", show(&o));
 }
 
@@ -349,21 +240,15 @@ fn nan_infinite_negative_and_zero_options_fail_before_any_work() {
     assert!(stderr(&o).contains("--n-levels"), "{}", show(&o));
     // a config file with NaN / infinity
     let toml = tmp.path().join("bad.toml");
-    for (text, field) in [
-        ("delta = nan\n", "delta"),
-        ("scale_factor = inf\n", "scale_factor"),
-        ("delta = -0.5\n", "delta"),
-    ] {
+    for (text, field) in
+        [("delta = nan\n", "delta"), ("scale_factor = inf\n", "scale_factor"), ("delta = -0.5\n", "delta")]
+    {
         std::fs::write(&toml, text).unwrap();
         let o = lfast(&[&"detect", &img, &"--out", &out, &"--config", &toml]);
         assert_eq!(o.status.code(), Some(2), "{text}: {}", show(&o));
         assert!(stderr(&o).contains(field), "{text}: {}", show(&o));
     }
-    assert!(
-        files(&out).iter().all(|f| !f.ends_with(".json")),
-        "{:?}",
-        files(&out)
-    );
+    assert!(files(&out).iter().all(|f| !f.ends_with(".json")), "{:?}", files(&out));
 }
 
 // ------------------------------------------------------------ determinism
@@ -373,12 +258,7 @@ fn outputs_are_byte_identical_across_jobs_threads_and_backends() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("in");
     std::fs::create_dir(&dir).unwrap();
-    for name in [
-        "coins.png",
-        "text.png",
-        "astronaut_256.png",
-        "camera_cc0_v0.18plus.png",
-    ] {
+    for name in ["coins.png", "text.png", "astronaut_256.png", "camera_cc0_v0.18plus.png"] {
         std::fs::copy(common::data(name), dir.join(name)).unwrap();
     }
     let gpu = lfast::testing::context().is_some();
@@ -386,22 +266,10 @@ fn outputs_are_byte_identical_across_jobs_threads_and_backends() {
     let runs: Vec<Run> = vec![
         ("jobs1", vec!["--backend", "cpu", "--jobs", "1"], vec![]),
         ("jobs2", vec!["--backend", "cpu", "--jobs", "2"], vec![]),
-        (
-            "jobs2-again",
-            vec!["--backend", "cpu", "--jobs", "2"],
-            vec![],
-        ),
+        ("jobs2-again", vec!["--backend", "cpu", "--jobs", "2"], vec![]),
         ("jobs7", vec!["--backend", "cpu", "--jobs", "7"], vec![]),
-        (
-            "rayon1",
-            vec!["--backend", "cpu"],
-            vec![("RAYON_NUM_THREADS", "1")],
-        ),
-        (
-            "rayon3",
-            vec!["--backend", "cpu"],
-            vec![("RAYON_NUM_THREADS", "3")],
-        ),
+        ("rayon1", vec!["--backend", "cpu"], vec![("RAYON_NUM_THREADS", "1")]),
+        ("rayon3", vec!["--backend", "cpu"], vec![("RAYON_NUM_THREADS", "3")]),
         ("gpu", vec!["--backend", "gpu"], vec![]),
         ("gpu-jobs1", vec!["--backend", "gpu", "--jobs", "1"], vec![]),
     ];
@@ -412,14 +280,7 @@ fn outputs_are_byte_identical_across_jobs_threads_and_backends() {
             continue;
         }
         let out = tmp.path().join(name);
-        let mut args: Vec<&dyn AsRef<OsStr>> = vec![
-            &"detect",
-            &dir,
-            &"--out",
-            &out,
-            &"--format",
-            &"json,csv,npy,yaml",
-        ];
+        let mut args: Vec<&dyn AsRef<OsStr>> = vec![&"detect", &dir, &"--out", &out, &"--format", &"json,csv,npy,yaml"];
         for f in &flags {
             args.push(f);
         }
@@ -432,12 +293,7 @@ fn outputs_are_byte_identical_across_jobs_threads_and_backends() {
                 (f, b)
             })
             .collect();
-        assert_eq!(
-            got.len(),
-            4 * 5,
-            "{name}: {:?}",
-            got.iter().map(|g| &g.0).collect::<Vec<_>>()
-        );
+        assert_eq!(got.len(), 4 * 5, "{name}: {:?}", got.iter().map(|g| &g.0).collect::<Vec<_>>());
         match &reference {
             None => reference = Some((name.to_string(), got)),
             Some((rname, want)) => {
@@ -490,16 +346,9 @@ fn assert_complete(out: &Path) {
                 (a.trim().parse().unwrap(), b.trim().parse().unwrap())
             };
             let item = if header.contains("<f4") { 4 } else { 1 };
-            assert_eq!(
-                bytes.len(),
-                10 + hlen + rows * cols * item,
-                "{f}: truncated"
-            );
+            assert_eq!(bytes.len(), 10 + hlen + rows * cols * item, "{f}: truncated");
         } else if f.ends_with(".yaml") {
-            assert!(
-                bytes.ends_with(b" ]\n") && bytes.starts_with(b"%YAML:1.0"),
-                "{f}: truncated"
-            );
+            assert!(bytes.ends_with(b" ]\n") && bytes.starts_with(b"%YAML:1.0"), "{f}: truncated");
         } else if f.ends_with(".png") {
             image::load_from_memory(&bytes).unwrap_or_else(|e| panic!("{f}: {e}"));
         } else if !f.ends_with(".csv") {
@@ -510,10 +359,7 @@ fn assert_complete(out: &Path) {
 
 /// Hidden temporary files left in `out`.
 fn temporaries(out: &Path) -> Vec<String> {
-    files(out)
-        .into_iter()
-        .filter(|f| f.ends_with(".tmp"))
-        .collect()
+    files(out).into_iter().filter(|f| f.ends_with(".tmp")).collect()
 }
 
 /// Starts a batch, waits until `after` JSON outputs exist, sends `sig`;
@@ -521,19 +367,7 @@ fn temporaries(out: &Path) -> Vec<String> {
 #[cfg(unix)]
 fn interrupt(dir: &Path, out: &Path, after: usize, sig: libc::c_int) -> Option<Output> {
     let mut child = command(
-        &[
-            &"detect",
-            &dir,
-            &"--out",
-            &out,
-            &"--format",
-            &FORMATS,
-            &"--draw",
-            &"--backend",
-            &"cpu",
-            &"--jobs",
-            &"1",
-        ],
+        &[&"detect", &dir, &"--out", &out, &"--format", &FORMATS, &"--draw", &"--backend", &"cpu", &"--jobs", &"1"],
         &[],
     )
     .stdout(Stdio::piped())
@@ -548,10 +382,7 @@ fn interrupt(dir: &Path, out: &Path, after: usize, sig: libc::c_int) -> Option<O
         if files(out).iter().filter(|f| f.ends_with(".json")).count() >= after {
             break;
         }
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "no output after 120 s"
-        );
+        assert!(start.elapsed() < Duration::from_secs(120), "no output after 120 s");
         std::thread::sleep(Duration::from_millis(2));
     }
     // SAFETY: kill() on our own child's pid.
@@ -568,26 +399,11 @@ fn sigint_and_sigkill_mid_batch_leave_no_partial_output_and_skip_existing_finish
     let dir = frames(tmp.path(), n);
     // the reference: one uninterrupted run
     let want_dir = tmp.path().join("want");
-    let o = lfast(&[
-        &"detect",
-        &dir,
-        &"--out",
-        &want_dir,
-        &"--format",
-        &FORMATS,
-        &"--draw",
-        &"--backend",
-        &"cpu",
-    ]);
+    let o = lfast(&[&"detect", &dir, &"--out", &want_dir, &"--format", &FORMATS, &"--draw", &"--backend", &"cpu"]);
     assert!(o.status.success(), "{}", show(&o));
     let want = files(&want_dir);
     assert_eq!(want.len(), n as usize * 6);
-    for (sig, after) in [
-        (libc::SIGINT, 1),
-        (libc::SIGINT, 4),
-        (libc::SIGKILL, 1),
-        (libc::SIGKILL, 4),
-    ] {
+    for (sig, after) in [(libc::SIGINT, 1), (libc::SIGINT, 4), (libc::SIGKILL, 1), (libc::SIGKILL, 4)] {
         let what = format!("signal {sig} after {after} outputs");
         let out = tmp.path().join(format!("out-{sig}-{after}"));
         let Some(o) = interrupt(&dir, &out, after, sig) else {
@@ -596,29 +412,19 @@ fn sigint_and_sigkill_mid_batch_leave_no_partial_output_and_skip_existing_finish
         assert_eq!(o.status.signal(), Some(sig), "{what}: {}", show(&o));
         let left = files(&out);
         let done = left.iter().filter(|f| f.ends_with(".json")).count();
-        assert!(
-            done >= after && done < n as usize,
-            "{what}: {done} of {n} done"
-        );
+        assert!(done >= after && done < n as usize, "{what}: {done} of {n} done");
         if sig == libc::SIGINT {
             // stopped between files: a summary, a note, every output of a
             // finished frame renamed into place, no temporary file
             assert!(stdout(&o).contains("summary: done"), "{what}: {}", show(&o));
             assert!(stderr(&o).contains("interrupted"), "{what}: {}", show(&o));
             assert_eq!(temporaries(&out), Vec::<String>::new(), "{what}");
-            assert_eq!(
-                left.len() % 6,
-                0,
-                "{what}: a frame with some of its outputs: {left:?}"
-            );
+            assert_eq!(left.len() % 6, 0, "{what}: a frame with some of its outputs: {left:?}");
         }
         // SIGKILL may leave a hidden .NAME.PID.tmp; never a partial final file
         assert_complete(&out);
         for f in left.iter().filter(|f| !f.ends_with(".tmp")) {
-            assert!(
-                std::fs::read(out.join(f)).unwrap() == std::fs::read(want_dir.join(f)).unwrap(),
-                "{what}: {f}"
-            );
+            assert!(std::fs::read(out.join(f)).unwrap() == std::fs::read(want_dir.join(f)).unwrap(), "{what}: {f}");
         }
         // the rerun skips what is there, does the rest, removes stale temporaries
         let o = lfast(&[
@@ -639,10 +445,7 @@ fn sigint_and_sigkill_mid_batch_leave_no_partial_output_and_skip_existing_finish
         assert!(s as usize >= left.len() / 6, "{what}: {s} skipped");
         assert_eq!(files(&out), want, "{what}: after the rerun");
         for f in &want {
-            assert!(
-                std::fs::read(out.join(f)).unwrap() == std::fs::read(want_dir.join(f)).unwrap(),
-                "{what}: {f}"
-            );
+            assert!(std::fs::read(out.join(f)).unwrap() == std::fs::read(want_dir.join(f)).unwrap(), "{what}: {f}");
         }
     }
 }
@@ -654,35 +457,14 @@ fn sigint_stops_lfast_edges_between_files() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = frames(tmp.path(), 30);
     let out = tmp.path().join("edges");
-    let mut child = command(
-        &[
-            &"edges",
-            &dir,
-            &"--out",
-            &out,
-            &"--debug",
-            &"--backend",
-            &"cpu",
-            &"--jobs",
-            &"1",
-        ],
-        &[],
-    )
-    .stdout(Stdio::piped())
-    .stderr(Stdio::piped())
-    .spawn()
-    .unwrap();
+    let mut child = command(&[&"edges", &dir, &"--out", &out, &"--debug", &"--backend", &"cpu", &"--jobs", &"1"], &[])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
     let start = Instant::now();
-    while files(&out)
-        .iter()
-        .filter(|f| f.ends_with(".edges.png"))
-        .count()
-        < 1
-    {
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "finished before the signal"
-        );
+    while files(&out).iter().filter(|f| f.ends_with(".edges.png")).count() < 1 {
+        assert!(child.try_wait().unwrap().is_none(), "finished before the signal");
         assert!(start.elapsed() < Duration::from_secs(120));
         std::thread::sleep(Duration::from_millis(2));
     }
@@ -692,10 +474,7 @@ fn sigint_stops_lfast_edges_between_files() {
     assert_eq!(o.status.signal(), Some(libc::SIGINT), "{}", show(&o));
     let left = files(&out);
     assert_eq!(temporaries(&out), Vec::<String>::new());
-    assert!(
-        !left.is_empty() && left.len() < 30 * 5 && left.len().is_multiple_of(5),
-        "{left:?}"
-    );
+    assert!(!left.is_empty() && left.len() < 30 * 5 && left.len().is_multiple_of(5), "{left:?}");
     for f in &left {
         image::open(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
     }

@@ -3,7 +3,12 @@
 
 mod common;
 
-use lfast::cpu::{corner_nms::corner_nms, edge_map, lfast::{LfastParams, lfast}, response::responses};
+use lfast::cpu::{
+    corner_nms::corner_nms,
+    edge_map,
+    lfast::{LfastParams, lfast},
+    response::responses,
+};
 use lfast::{Config, Mode};
 
 #[test]

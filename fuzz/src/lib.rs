@@ -73,28 +73,14 @@ pub fn image(r: &mut Bytes, w: u32, h: u32) -> Plane<u8> {
             let raw = r.rest();
             (0..n)
                 .map(|i| {
-                    let v = if raw.is_empty() {
-                        0
-                    } else {
-                        raw[i % raw.len()]
-                    };
-                    if kind == 6 {
-                        [0, 128, 255][v as usize % 3]
-                    } else {
-                        v
-                    }
+                    let v = if raw.is_empty() { 0 } else { raw[i % raw.len()] };
+                    if kind == 6 { [0, 128, 255][v as usize % 3] } else { v }
                 })
                 .collect()
         }
         1 => vec![a; n],
         2 => (0..n)
-            .map(|i| {
-                if ((i as u32 % w.max(1)) / p1 + (i as u32 / w.max(1)) / p1).is_multiple_of(2) {
-                    a
-                } else {
-                    b
-                }
-            })
+            .map(|i| if ((i as u32 % w.max(1)) / p1 + (i as u32 / w.max(1)) / p1).is_multiple_of(2) { a } else { b })
             .collect(),
         3 => (0..n)
             .map(|i| {
@@ -118,15 +104,9 @@ pub fn image(r: &mut Bytes, w: u32, h: u32) -> Plane<u8> {
             }
             px
         }
-        _ => (0..n)
-            .map(|i| ((i as u32 % w.max(1)) * p1 + (i as u32 / w.max(1)) * (b as u32 % 5)) as u8)
-            .collect(),
+        _ => (0..n).map(|i| ((i as u32 % w.max(1)) * p1 + (i as u32 / w.max(1)) * (b as u32 % 5)) as u8).collect(),
     };
-    Plane {
-        width: w,
-        height: h,
-        data,
-    }
+    Plane { width: w, height: h, data }
 }
 
 /// A config whose fields the bytes choose, mostly in range, sometimes just
@@ -134,45 +114,15 @@ pub fn image(r: &mut Bytes, w: u32, h: u32) -> Plane<u8> {
 /// validation is fuzzed together with the pipeline.
 pub fn config(r: &mut Bytes) -> Config {
     Config {
-        delta: r.pick(&[
-            0.1,
-            0.0001,
-            0.05,
-            0.5,
-            1.0,
-            100.0,
-            0.0,
-            -1.0,
-            f64::NAN,
-            f64::INFINITY,
-            0.00004,
-            100.5,
-        ]),
+        delta: r.pick(&[0.1, 0.0001, 0.05, 0.5, 1.0, 100.0, 0.0, -1.0, f64::NAN, f64::INFINITY, 0.00004, 100.5]),
         alpha_pct: r.u8() as u32 % 101,
-        mode: if r.u8() & 1 == 0 {
-            Mode::Branch
-        } else {
-            Mode::Paper
-        },
+        mode: if r.u8() & 1 == 0 { Mode::Branch } else { Mode::Paper },
         support: r.u8() as u32 % 9,
         straight_tol: r.u8() as u32 % 9,
         border: r.pick(&[7, 8, 9, 12, 16, 20, 31, 6, 0, 1024, 1025]),
         nms_radius: r.u8() as u32 % 34,
         n_levels: r.u8() as u32 % 34,
-        scale_factor: r.pick(&[
-            1.2,
-            1.01,
-            1.5,
-            2.0,
-            4.0,
-            1.1,
-            3.7,
-            1.0,
-            4.01,
-            f64::NAN,
-            -2.0,
-            f64::INFINITY,
-        ]),
+        scale_factor: r.pick(&[1.2, 1.01, 1.5, 2.0, 4.0, 1.1, 3.7, 1.0, 4.01, f64::NAN, -2.0, f64::INFINITY]),
         n_features: r.pick(&[0, 1, 2, 5, 50, 500]),
         distribution: r.u8() & 1 == 1,
         orientation_bins: r.pick(&[30, 0, 1, 2, 7, 360, 361]),
@@ -182,25 +132,16 @@ pub fn config(r: &mut Bytes) -> Config {
 /// The level pixel of an L-FAST keypoint: pt = ((x + 0.5) s, (y + 0.5) s).
 fn level_xy(k: &KeyPoint, scale_factor: f64) -> (u32, u32) {
     let s = scale_factor.powi(k.octave);
-    (
-        (k.pt.x as f64 / s).floor() as u32,
-        (k.pt.y as f64 / s).floor() as u32,
-    )
+    ((k.pt.x as f64 / s).floor() as u32, (k.pt.y as f64 / s).floor() as u32)
 }
 
 /// SPEC 9-11 output invariants: fields in range, inside the border and the
 /// image, strictly ordered by (-response, octave, y, x).
 pub fn check_keypoints(kps: &[KeyPoint], cfg: &Config, w: u32, h: u32, what: &str) {
     for (i, k) in kps.iter().enumerate() {
-        assert!(
-            (0..cfg.n_levels as i32).contains(&k.octave),
-            "{what} {i}: octave {k:?}"
-        );
+        assert!((0..cfg.n_levels as i32).contains(&k.octave), "{what} {i}: octave {k:?}");
         let s = cfg.scale_factor.powi(k.octave);
-        assert!(
-            (k.size as f64 - 31.0 * s).abs() < 1e-3 * s,
-            "{what} {i}: size {k:?}"
-        );
+        assert!((k.size as f64 - 31.0 * s).abs() < 1e-3 * s, "{what} {i}: size {k:?}");
         assert!((0.0..360.0).contains(&k.angle), "{what} {i}: angle {k:?}");
         assert!(k.response.is_finite(), "{what} {i}: response {k:?}");
         assert_eq!(k.class_id, -1, "{what} {i}");
@@ -209,10 +150,7 @@ pub fn check_keypoints(kps: &[KeyPoint], cfg: &Config, w: u32, h: u32, what: &st
             "{what} {i}: outside {w}x{h}: {k:?}"
         );
         let (x, y) = level_xy(k, cfg.scale_factor);
-        assert!(
-            x >= cfg.border && y >= cfg.border,
-            "{what} {i}: ({x},{y}) inside the border: {k:?}"
-        );
+        assert!(x >= cfg.border && y >= cfg.border, "{what} {i}: ({x},{y}) inside the border: {k:?}");
     }
     for (i, p) in kps.windows(2).enumerate() {
         let key = |k: &KeyPoint| {
@@ -267,9 +205,7 @@ pub fn decode_detect(data: &[u8]) {
         }
         Err(e) => panic!("unexpected error kind: {e:?}"),
     };
-    assert!(
-        img.width >= 1 && img.height >= 1 && img.width.max(img.height) <= lfast::image::MAX_SIDE
-    );
+    assert!(img.width >= 1 && img.height >= 1 && img.width.max(img.height) <= lfast::image::MAX_SIDE);
     assert_eq!(img.data.len(), img.width as usize * img.height as usize);
     if img.width as u64 * img.height as u64 > 512 * 512 {
         return;
@@ -300,36 +236,15 @@ pub fn cpu_pipeline(data: &[u8]) {
     let what = format!("{w}x{h} {cfg:?}");
     if let Err(e) = cfg.validate() {
         assert!(matches!(e, Error::InvalidConfig { .. }), "{what}: {e:?}");
-        assert!(
-            matches!(
-                CpuDetector::new(cfg.clone()),
-                Err(Error::InvalidConfig { .. })
-            ),
-            "{what}"
-        );
-        assert!(
-            matches!(
-                lfast::Detector::new(cfg, lfast::Backend::Cpu),
-                Err(Error::InvalidConfig { .. })
-            ),
-            "{what}"
-        );
+        assert!(matches!(CpuDetector::new(cfg.clone()), Err(Error::InvalidConfig { .. })), "{what}");
+        assert!(matches!(lfast::Detector::new(cfg, lfast::Backend::Cpu), Err(Error::InvalidConfig { .. })), "{what}");
         return;
     }
     let det = CpuDetector::new(cfg.clone()).unwrap();
     let view = img.view();
     if w == 0 || h == 0 {
-        assert!(
-            matches!(
-                det.detect_and_compute(view, None),
-                Err(Error::InvalidImage { .. })
-            ),
-            "{what}"
-        );
-        assert!(
-            matches!(det.edge_image(view), Err(Error::InvalidImage { .. })),
-            "{what}"
-        );
+        assert!(matches!(det.detect_and_compute(view, None), Err(Error::InvalidImage { .. })), "{what}");
+        assert!(matches!(det.edge_image(view), Err(Error::InvalidImage { .. })), "{what}");
         assert!(GrayView::new(w, h, w as usize, &img.data).is_err());
         return;
     }
@@ -337,64 +252,35 @@ pub fn cpu_pipeline(data: &[u8]) {
     assert_eq!(kps.len(), desc.len(), "{what}");
     check_keypoints(&kps, &cfg, w, h, &what);
     assert_eq!(det.detect(view, None).unwrap(), kps, "{what}: detect");
-    assert_eq!(
-        det.detect_and_compute(view, None).unwrap(),
-        (kps.clone(), desc.clone()),
-        "{what}: second run"
-    );
+    assert_eq!(det.detect_and_compute(view, None).unwrap(), (kps.clone(), desc.clone()), "{what}: second run");
     assert_eq!(det.compute(view, &kps).unwrap(), desc, "{what}: compute");
     let staged = det.edges(view).unwrap();
     let fused = det.edge_image(view).unwrap();
-    assert_eq!(
-        fused, staged.edges,
-        "{what}: fused edge image != staged edge map"
-    );
+    assert_eq!(fused, staged.edges, "{what}: fused edge image != staged edge map");
     assert!(fused.data.iter().all(|&v| v == 0 || v == 255), "{what}");
     if staged.t1().is_none() {
         // SPEC 4: a histogram with one non-empty bin (a flat image) has no edges
-        assert!(
-            fused.data.iter().all(|&v| v == 0),
-            "{what}: edges without an Otsu threshold"
-        );
+        assert!(fused.data.iter().all(|&v| v == 0), "{what}: edges without an Otsu threshold");
     }
     match mask_kind {
         1 => {
-            let on = Plane {
-                width: w,
-                height: h,
-                data: vec![255u8; img.data.len()],
-            };
-            assert_eq!(
-                det.detect_and_compute(view, Some(on.view())).unwrap(),
-                (kps, desc),
-                "{what}: all-on mask"
-            );
+            let on = Plane { width: w, height: h, data: vec![255u8; img.data.len()] };
+            assert_eq!(det.detect_and_compute(view, Some(on.view())).unwrap(), (kps, desc), "{what}: all-on mask");
         }
         2 => {
             let off = Plane::<u8>::new(w, h);
-            assert!(
-                det.detect(view, Some(off.view())).unwrap().is_empty(),
-                "{what}: all-off mask"
-            );
+            assert!(det.detect(view, Some(off.view())).unwrap().is_empty(), "{what}: all-off mask");
         }
         3 => {
             let m = Plane::<u8>::new(w + 1, h);
-            assert!(
-                matches!(
-                    det.detect(view, Some(m.view())),
-                    Err(Error::MaskSize { .. })
-                ),
-                "{what}"
-            );
+            assert!(matches!(det.detect(view, Some(m.view())), Err(Error::MaskSize { .. })), "{what}");
         }
         4 => {
             let (x0, y0) = (w / 4, h / 4);
             let m = Plane {
                 width: w,
                 height: h,
-                data: (0..w * h)
-                    .map(|i| ((i % w) >= x0 && (i / w) >= y0) as u8)
-                    .collect(),
+                data: (0..w * h).map(|i| ((i % w) >= x0 && (i / w) >= y0) as u8).collect(),
             };
             let (mk, md) = det.detect_and_compute(view, Some(m.view())).unwrap();
             assert_eq!(mk.len(), md.len());
@@ -404,10 +290,7 @@ pub fn cpu_pipeline(data: &[u8]) {
     }
     let f = lfast::baseline::fast::fast9(&img, 1 + (w as i32 * 7 + h as i32) % 60, true);
     for k in &f {
-        assert!(
-            k.pt.x >= 3.0 && k.pt.y >= 3.0 && k.pt.x + 3.0 < w as f32 && k.pt.y + 3.0 < h as f32,
-            "{what}: {k:?}"
-        );
+        assert!(k.pt.x >= 3.0 && k.pt.y >= 3.0 && k.pt.x + 3.0 < w as f32 && k.pt.y + 3.0 < h as f32, "{what}: {k:?}");
     }
     let c = lfast::baseline::canny::canny(&img, &Default::default());
     assert_eq!((c.width, c.height), (w, h));
@@ -428,48 +311,14 @@ pub fn cpu_pipeline(data: &[u8]) {
 /// built once) instead of drawing every field.
 pub fn gpu_configs() -> Vec<Config> {
     let d = Config::default;
-    let tight = |mode| Config {
-        mode,
-        border: 7,
-        nms_radius: 1,
-        n_levels: 3,
-        ..d()
-    };
+    let tight = |mode| Config { mode, border: 7, nms_radius: 1, n_levels: 3, ..d() };
     vec![
         tight(Mode::Branch),
         tight(Mode::Paper),
-        Config {
-            border: 7,
-            nms_radius: 0,
-            n_levels: 2,
-            scale_factor: 1.5,
-            ..d()
-        },
-        Config {
-            border: 7,
-            n_levels: 4,
-            scale_factor: 1.2,
-            n_features: 5,
-            ..d()
-        },
-        Config {
-            border: 8,
-            nms_radius: 2,
-            n_levels: 1,
-            support: 1,
-            straight_tol: 0,
-            orientation_bins: 360,
-            ..d()
-        },
-        Config {
-            border: 7,
-            n_levels: 3,
-            scale_factor: 2.0,
-            delta: 1.0,
-            alpha_pct: 0,
-            mode: Mode::Paper,
-            ..d()
-        },
+        Config { border: 7, nms_radius: 0, n_levels: 2, scale_factor: 1.5, ..d() },
+        Config { border: 7, n_levels: 4, scale_factor: 1.2, n_features: 5, ..d() },
+        Config { border: 8, nms_radius: 2, n_levels: 1, support: 1, straight_tol: 0, orientation_bins: 360, ..d() },
+        Config { border: 7, n_levels: 3, scale_factor: 2.0, delta: 1.0, alpha_pct: 0, mode: Mode::Paper, ..d() },
         Config {
             border: 7,
             n_levels: 2,
@@ -480,11 +329,7 @@ pub fn gpu_configs() -> Vec<Config> {
             orientation_bins: 1,
             ..d()
         },
-        Config {
-            border: 7,
-            n_levels: 8,
-            ..d()
-        },
+        Config { border: 7, n_levels: 8, ..d() },
     ]
 }
 
@@ -493,22 +338,13 @@ pub fn gpu_configs() -> Vec<Config> {
 /// across sizes is exercised too).
 pub struct GpuState {
     ctx: lfast::gpu::GpuContext,
-    dets: Vec<
-        Option<(
-            lfast::gpu::detector::GpuDetector,
-            CpuDetector,
-            Option<lfast::gpu::detector::GpuWorkspace>,
-        )>,
-    >,
+    dets: Vec<Option<(lfast::gpu::detector::GpuDetector, CpuDetector, Option<lfast::gpu::detector::GpuWorkspace>)>>,
 }
 
 impl GpuState {
     /// Detectors on `ctx`.
     pub fn new(ctx: lfast::gpu::GpuContext) -> Self {
-        Self {
-            ctx,
-            dets: (0..gpu_configs().len()).map(|_| None).collect(),
-        }
+        Self { ctx, dets: (0..gpu_configs().len()).map(|_| None).collect() }
     }
 }
 
@@ -524,8 +360,7 @@ pub fn cpu_vs_gpu(data: &[u8], st: &mut GpuState) {
     let (gpu, cpu, ws) = st.dets[i].get_or_insert_with(|| {
         let cfg = gpu_configs()[i].clone();
         (
-            lfast::gpu::detector::GpuDetector::new(st.ctx.clone(), cfg.clone())
-                .expect("GPU detector"),
+            lfast::gpu::detector::GpuDetector::new(st.ctx.clone(), cfg.clone()).expect("GPU detector"),
             CpuDetector::new(cfg).expect("valid config"),
             None,
         )
@@ -535,26 +370,16 @@ pub fn cpu_vs_gpu(data: &[u8], st: &mut GpuState) {
         1 => Some(Plane {
             width: w,
             height: h,
-            data: (0..w * h)
-                .map(|j| ((j % w) >= w / 3 && (j / w) < h - h / 4) as u8 * 255)
-                .collect(),
+            data: (0..w * h).map(|j| ((j % w) >= w / 3 && (j / w) < h - h / 4) as u8 * 255).collect(),
         }),
-        2 => Some(Plane {
-            width: w,
-            height: h,
-            data: img.data.iter().map(|&v| (v > 40) as u8).collect(),
-        }),
+        2 => Some(Plane { width: w, height: h, data: img.data.iter().map(|&v| (v > 40) as u8).collect() }),
         _ => None,
     };
     let mv = mask.as_ref().map(|m| m.view());
-    let g = gpu
-        .detect_and_compute(ws, img.view(), mv)
-        .unwrap_or_else(|e| panic!("{what}: GPU: {e}"));
+    let g = gpu.detect_and_compute(ws, img.view(), mv).unwrap_or_else(|e| panic!("{what}: GPU: {e}"));
     let c = cpu.detect_and_compute(img.view(), mv).unwrap();
     assert_eq!(g.keypoints, c.0, "{what}: keypoints");
     assert_eq!(g.descriptors, c.1, "{what}: descriptors");
-    let ge = gpu
-        .edge_image(ws, img.view())
-        .unwrap_or_else(|e| panic!("{what}: GPU edges: {e}"));
+    let ge = gpu.edge_image(ws, img.view()).unwrap_or_else(|e| panic!("{what}: GPU edges: {e}"));
     assert_eq!(ge, cpu.edge_image(img.view()).unwrap(), "{what}: edge map");
 }

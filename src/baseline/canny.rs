@@ -61,7 +61,9 @@ pub fn canny(img: &Plane<u8>, p: &CannyParams) -> Plane<u8> {
         }
     });
     let s: Vec<u64> = gxy.iter().map(|&(a, b)| (a * a + b * b) as u64).collect();
-    let s_at = |x: i32, y: i32| if x < 0 || y < 0 || x >= w as i32 || y >= h as i32 { 0 } else { s[y as usize * w + x as usize] };
+    let s_at = |x: i32, y: i32| {
+        if x < 0 || y < 0 || x >= w as i32 || y >= h as i32 { 0 } else { s[y as usize * w + x as usize] }
+    };
     let (low2, high2) = (p.low * p.low, p.high * p.high);
     let mut classes = Plane::<u8>::new(img.width, img.height);
     classes.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {

@@ -146,7 +146,6 @@ pub fn fast9_and_compute(
     Ok((kps, desc))
 }
 
-
 /// OpenCV's quick rejection at one pixel, the scalar reference of
 /// [`quick_classes_row`]: with class 1 for a circle pixel darker than
 /// `v - t`, 2 for brighter than `v + t`, 0 otherwise, the AND over the eight

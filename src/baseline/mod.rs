@@ -1,5 +1,5 @@
 //! Baselines of SPEC 12 behind the crate's types: traditional Canny, FAST-9 and ORB.
 
-pub mod fast;
 pub mod canny;
+pub mod fast;
 pub mod orb;

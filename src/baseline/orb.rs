@@ -31,7 +31,14 @@ pub struct OrbParams {
 
 impl Default for OrbParams {
     fn default() -> Self {
-        Self { n_features: 500, scale_factor: 1.2, n_levels: 8, edge_threshold: 31, fast_threshold: 20, orientation_bins: 30 }
+        Self {
+            n_features: 500,
+            scale_factor: 1.2,
+            n_levels: 8,
+            edge_threshold: 31,
+            fast_threshold: 20,
+            orientation_bins: 30,
+        }
     }
 }
 
@@ -97,7 +104,9 @@ impl OrbDetector {
                     })
                     .collect();
                 // retainBest(2 * quota) by FAST score, ties by position
-                kps.sort_by(|a, c| c.response.total_cmp(&a.response).then(a.pt.y.total_cmp(&c.pt.y)).then(a.pt.x.total_cmp(&c.pt.x)));
+                kps.sort_by(|a, c| {
+                    c.response.total_cmp(&a.response).then(a.pt.y.total_cmp(&c.pt.y)).then(a.pt.x.total_cmp(&c.pt.x))
+                });
                 kps.truncate(2 * quotas[l] as usize);
                 let mut cs: Vec<Corner> = kps
                     .iter()

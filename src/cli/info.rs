@@ -13,7 +13,10 @@ pub(super) fn run(adapter: Option<String>) -> Result<bool, CliError> {
     println!("GPU adapters found: {}", all.len());
     for a in &all {
         let kind = if is_hardware(a) { "hardware" } else { "software or unknown: never taken by auto unless named" };
-        println!("  - {} ({:?}, {:?}, {kind}, driver {} {})", a.name, a.backend, a.device_type, a.driver, a.driver_info);
+        println!(
+            "  - {} ({:?}, {:?}, {kind}, driver {} {})",
+            a.name, a.backend, a.device_type, a.driver, a.driver_info
+        );
     }
     match auto_choice(&opts) {
         AutoChoice::Gpu { info, named: true } => {

@@ -11,9 +11,9 @@ mod draw;
 mod edges;
 mod eval;
 mod info;
-mod vo;
 mod inputs;
 mod report;
+mod vo;
 
 use crate::config::{Config, Mode};
 use clap::{Parser, Subcommand, ValueEnum};

@@ -2,8 +2,8 @@
 //! OpenCV's fixed-point GaussianBlur for 8-bit images. SPEC 11 uses the 7x7,
 //! sigma 2 kernel before sampling descriptors. Mirrors shaders/blur.wgsl.
 
-use crate::image::Plane;
 use super::simd::dispatch;
+use crate::image::Plane;
 use rayon::prelude::*;
 
 /// Q8 weights of a `ksize`-tap Gaussian with `sigma`, summing exactly to 256:
@@ -111,7 +111,13 @@ fn blur_n<const N: usize>(src: &Plane<u8>, kernel: &[u32; N], tmp: &mut Vec<u16>
     tmp.resize(w * h, 0);
     tmp.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         let s = src.row(y as u32);
-        let tap = |x: usize| kernel.iter().enumerate().map(|(i, &k)| k as u16 * s[reflect101(x as i32 + i as i32 - r as i32, w as i32)] as u16).sum::<u16>();
+        let tap = |x: usize| {
+            kernel
+                .iter()
+                .enumerate()
+                .map(|(i, &k)| k as u16 * s[reflect101(x as i32 + i as i32 - r as i32, w as i32)] as u16)
+                .sum::<u16>()
+        };
         if w > 2 * r && N == 7 {
             let k7: &[u16; 7] = k16.as_slice().try_into().expect("N == 7");
             hrow7(s, k7, &mut row[r..w - r]);
@@ -145,13 +151,21 @@ fn blur_any(src: &Plane<u8>, kernel: &[u32]) -> Plane<u8> {
     for y in 0..h {
         let s = src.row(y as u32);
         for x in 0..w {
-            tmp[y * w + x] = kernel.iter().enumerate().map(|(k, &wk)| wk * s[reflect101(x as i32 + k as i32 - r, w as i32)] as u32).sum();
+            tmp[y * w + x] = kernel
+                .iter()
+                .enumerate()
+                .map(|(k, &wk)| wk * s[reflect101(x as i32 + k as i32 - r, w as i32)] as u32)
+                .sum();
         }
     }
     let mut out = Plane::<u8>::new(src.width, src.height);
     for y in 0..h {
         for x in 0..w {
-            let acc: u32 = kernel.iter().enumerate().map(|(k, &wk)| wk * tmp[reflect101(y as i32 + k as i32 - r, h as i32) * w + x]).sum();
+            let acc: u32 = kernel
+                .iter()
+                .enumerate()
+                .map(|(k, &wk)| wk * tmp[reflect101(y as i32 + k as i32 - r, h as i32) * w + x])
+                .sum();
             out.data[y * w + x] = ((acc + (1 << 15)) >> 16) as u8;
         }
     }

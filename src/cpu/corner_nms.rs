@@ -26,9 +26,9 @@ pub fn corner_nms(_width: u32, _height: u32, cands: &[[u32; 2]], resp: &[f32], r
             let [px, py] = cands[i];
             let lo = ys.partition_point(|&y| y + r < py);
             let hi = ys.partition_point(|&y| y <= py + r);
-            !by_pos[lo..hi].iter().any(|&j| {
-                j != i && cands[j][0].abs_diff(px) <= r && beats(resp[j], cands[j], resp[i], cands[i])
-            })
+            !by_pos[lo..hi]
+                .iter()
+                .any(|&j| j != i && cands[j][0].abs_diff(px) <= r && beats(resp[j], cands[j], resp[i], cands[i]))
         })
         .collect();
     keep.sort_unstable();

@@ -61,12 +61,24 @@ pub fn median9(mut p: [u8; 9]) -> u8 {
         p[a] = x.min(y);
         p[b] = x.max(y);
     }
-    s(&mut p, 1, 2); s(&mut p, 4, 5); s(&mut p, 7, 8);
-    s(&mut p, 0, 1); s(&mut p, 3, 4); s(&mut p, 6, 7);
-    s(&mut p, 1, 2); s(&mut p, 4, 5); s(&mut p, 7, 8);
-    s(&mut p, 0, 3); s(&mut p, 5, 8); s(&mut p, 4, 7);
-    s(&mut p, 3, 6); s(&mut p, 1, 4); s(&mut p, 2, 5);
-    s(&mut p, 4, 7); s(&mut p, 4, 2); s(&mut p, 6, 4);
+    s(&mut p, 1, 2);
+    s(&mut p, 4, 5);
+    s(&mut p, 7, 8);
+    s(&mut p, 0, 1);
+    s(&mut p, 3, 4);
+    s(&mut p, 6, 7);
+    s(&mut p, 1, 2);
+    s(&mut p, 4, 5);
+    s(&mut p, 7, 8);
+    s(&mut p, 0, 3);
+    s(&mut p, 5, 8);
+    s(&mut p, 4, 7);
+    s(&mut p, 3, 6);
+    s(&mut p, 1, 4);
+    s(&mut p, 2, 5);
+    s(&mut p, 4, 7);
+    s(&mut p, 4, 2);
+    s(&mut p, 6, 4);
     s(&mut p, 4, 2);
     p[4]
 }

@@ -210,7 +210,13 @@ impl CpuDetector {
             ws.levels.resize_with(1, Default::default);
             ws.edges.resize_with(1, Default::default);
             image.copy_into(&mut ws.levels[0]);
-            fused::edges_fused_into(&ws.levels[0], self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct, &mut ws.edges[0]);
+            fused::edges_fused_into(
+                &ws.levels[0],
+                self.cfg.delta_num(),
+                DELTA_DEN,
+                self.cfg.alpha_pct,
+                &mut ws.edges[0],
+            );
             ws.edges[0].edges.clone()
         }))
     }
@@ -405,16 +411,22 @@ impl CpuDetector {
 }
 
 /// The 7x7 sigma-2 blur of each level some corner uses (others are left stale).
-fn smooth_used_levels<'a>(levels: &[Plane<u8>], used: impl Iterator<Item = u32>, sm: &'a mut Smoothing) -> &'a [Plane<u8>] {
+fn smooth_used_levels<'a>(
+    levels: &[Plane<u8>],
+    used: impl Iterator<Item = u32>,
+    sm: &'a mut Smoothing,
+) -> &'a [Plane<u8>] {
     let mut need = vec![false; levels.len()];
     used.for_each(|l| need[l as usize] = true);
     sm.levels.resize_with(levels.len(), Default::default);
     sm.tmp.resize_with(levels.len(), Default::default);
-    levels.par_iter().zip(need).zip(sm.levels.par_iter_mut().zip(sm.tmp.par_iter_mut())).for_each(|((lv, n), (out, tmp))| {
-        if n {
-            blur::gaussian_blur_into(lv, &blur::ORB_KERNEL, tmp, out);
-        }
-    });
+    levels.par_iter().zip(need).zip(sm.levels.par_iter_mut().zip(sm.tmp.par_iter_mut())).for_each(
+        |((lv, n), (out, tmp))| {
+            if n {
+                blur::gaussian_blur_into(lv, &blur::ORB_KERNEL, tmp, out);
+            }
+        },
+    );
     &sm.levels[..levels.len()]
 }
 
@@ -439,7 +451,12 @@ mod tests {
         kp.octave = 9;
         assert!(det.compute(img.view(), &[kp]).unwrap_err().to_string().contains("keypoint 0: octave 9"));
         let kp = KeyPoint::new(64.5, 10.0, 31.0);
-        assert!(det.compute(img.view(), &[KeyPoint::new(1.0, 1.0, 7.0), kp]).unwrap_err().to_string().contains("keypoint 1"));
+        assert!(
+            det.compute(img.view(), &[KeyPoint::new(1.0, 1.0, 7.0), kp])
+                .unwrap_err()
+                .to_string()
+                .contains("keypoint 1")
+        );
         let kp = KeyPoint::new(f32::NAN, 10.0, 31.0);
         assert!(det.compute(img.view(), &[kp]).is_err());
     }

@@ -78,7 +78,8 @@ mod tests {
     #[test]
     fn border_and_interior_paths_agree() {
         // the same patch content seen at an interior point and through clamped reads
-        let img = Plane::from_vec(80, 80, (0..6400u32).map(|i| (i.wrapping_mul(2654435761) >> 24) as u8).collect()).unwrap();
+        let img =
+            Plane::from_vec(80, 80, (0..6400u32).map(|i| (i.wrapping_mul(2654435761) >> 24) as u8).collect()).unwrap();
         let rp = RotatedPatterns::new(Pattern::orb(), 30);
         for t in &rp.tables {
             assert!(t.iter().all(|p| p.iter().all(|&c| (c as i32).abs() <= REACH)));
@@ -102,11 +103,15 @@ mod tests {
 
     #[test]
     fn continuous_matches_binned_at_bin_centres() {
-        let img = Plane::from_vec(64, 64, (0..64 * 64).map(|i| ((i * 2654435761u64 as usize) >> 7) as u8).collect()).unwrap();
+        let img =
+            Plane::from_vec(64, 64, (0..64 * 64).map(|i| ((i * 2654435761u64 as usize) >> 7) as u8).collect()).unwrap();
         let rp = RotatedPatterns::new(Pattern::orb(), 4);
         for b in 0..4u32 {
             let deg = b as f32 * 90.0;
-            assert_eq!(describe_continuous(&img, 32, 32, deg, Pattern::orb()), describe(&img, 32, 32, &rp.tables[b as usize]));
+            assert_eq!(
+                describe_continuous(&img, 32, 32, deg, Pattern::orb()),
+                describe(&img, 32, 32, &rp.tables[b as usize])
+            );
         }
     }
 }

@@ -11,7 +11,8 @@ pub use crate::spec::angle::{AngleBins, HALF_PATCH, UMAX, angle_deg, compute_uma
 /// clamped to the image. `|m| < 2^21`, so they fit i32 with room.
 pub fn moments(img: &Plane<u8>, x: u32, y: u32) -> (i32, i32) {
     let (x, y) = (x as i32, y as i32);
-    let inside = x >= HALF_PATCH && y >= HALF_PATCH && x + HALF_PATCH < img.width as i32 && y + HALF_PATCH < img.height as i32;
+    let inside =
+        x >= HALF_PATCH && y >= HALF_PATCH && x + HALF_PATCH < img.width as i32 && y + HALF_PATCH < img.height as i32;
     let (mut m10, mut m01) = (0i32, 0i32);
     if inside {
         let w = img.width as usize;

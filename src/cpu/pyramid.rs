@@ -121,7 +121,8 @@ impl HGroups {
         #[cfg(not(target_arch = "x86_64"))]
         let avx2 = false;
         let n = if avx2 { sx.len() / 8 } else { 0 };
-        let (mut base, mut shuffle, mut weights) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut base, mut shuffle, mut weights) =
+            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
         for g in 0..n {
             let cols = 8 * g..8 * g + 8;
             let b = sx[8 * g];

@@ -24,9 +24,11 @@ pub fn structure_sums(img: &Plane<u8>, x: u32, y: u32) -> (i32, i32, i32) {
     let (mut a, mut b, mut c) = (0i32, 0i32, 0i32);
     for by in y - r..=y + r {
         for bx in x - r..=x + r {
-            let ix = (p(bx + 1, by) - p(bx - 1, by)) * 2 + (p(bx + 1, by - 1) - p(bx - 1, by - 1))
+            let ix = (p(bx + 1, by) - p(bx - 1, by)) * 2
+                + (p(bx + 1, by - 1) - p(bx - 1, by - 1))
                 + (p(bx + 1, by + 1) - p(bx - 1, by + 1));
-            let iy = (p(bx, by + 1) - p(bx, by - 1)) * 2 + (p(bx - 1, by + 1) - p(bx - 1, by - 1))
+            let iy = (p(bx, by + 1) - p(bx, by - 1)) * 2
+                + (p(bx - 1, by + 1) - p(bx - 1, by - 1))
                 + (p(bx + 1, by + 1) - p(bx + 1, by - 1));
             a += ix * ix;
             b += iy * iy;
@@ -110,7 +112,9 @@ mod tests {
     #[test]
     fn corner_beats_edge_beats_flat() {
         // bright quadrant x >= 10, y >= 10 in a 21x21 image
-        let img = Plane::from_vec(21, 21, (0..441).map(|i| if i % 21 >= 10 && i / 21 >= 10 { 200 } else { 20 }).collect()).unwrap();
+        let img =
+            Plane::from_vec(21, 21, (0..441).map(|i| if i % 21 >= 10 && i / 21 >= 10 { 200 } else { 20 }).collect())
+                .unwrap();
         let corner = harris(&img, 10, 10);
         let edge = harris(&img, 10, 16); // on the vertical edge, away from the corner
         let flat = harris(&img, 3, 3);
@@ -121,15 +125,20 @@ mod tests {
 
     #[test]
     fn inside_path_matches_clamped_reads() {
-        let img = Plane::from_vec(30, 25, (0..750u32).map(|i| (i.wrapping_mul(2654435761) >> 24) as u8).collect()).unwrap();
+        let img =
+            Plane::from_vec(30, 25, (0..750u32).map(|i| (i.wrapping_mul(2654435761) >> 24) as u8).collect()).unwrap();
         for y in 0..25 {
             for x in 0..30 {
                 let p = |dx: i32, dy: i32| img.clamped(dx, dy) as i32;
                 let (mut a, mut b, mut c) = (0, 0, 0);
                 for by in y - 3..=y + 3 {
                     for bx in x - 3..=x + 3 {
-                        let ix = (p(bx + 1, by) - p(bx - 1, by)) * 2 + (p(bx + 1, by - 1) - p(bx - 1, by - 1)) + (p(bx + 1, by + 1) - p(bx - 1, by + 1));
-                        let iy = (p(bx, by + 1) - p(bx, by - 1)) * 2 + (p(bx - 1, by + 1) - p(bx - 1, by - 1)) + (p(bx + 1, by + 1) - p(bx + 1, by - 1));
+                        let ix = (p(bx + 1, by) - p(bx - 1, by)) * 2
+                            + (p(bx + 1, by - 1) - p(bx - 1, by - 1))
+                            + (p(bx + 1, by + 1) - p(bx - 1, by + 1));
+                        let iy = (p(bx, by + 1) - p(bx, by - 1)) * 2
+                            + (p(bx - 1, by + 1) - p(bx - 1, by - 1))
+                            + (p(bx + 1, by + 1) - p(bx + 1, by - 1));
                         a += ix * ix;
                         b += iy * iy;
                         c += ix * iy;

@@ -48,10 +48,18 @@ pub fn rules(classes: &Plane<u8>) -> Plane<u8> {
 pub fn rule_at(classes: &Plane<u8>, x: u32, y: u32) -> u8 {
     match classes.at(x, y) {
         WEAK_STRONG => {
-            if has_neighbour(classes, x, y, WEAK_STRONG) { STRONG } else { WEAK }
+            if has_neighbour(classes, x, y, WEAK_STRONG) {
+                STRONG
+            } else {
+                WEAK
+            }
         }
         WEAK_WEAK => {
-            if has_neighbour(classes, x, y, WEAK_WEAK) { NONE } else { WEAK }
+            if has_neighbour(classes, x, y, WEAK_WEAK) {
+                NONE
+            } else {
+                WEAK
+            }
         }
         c => c,
     }

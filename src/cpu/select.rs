@@ -78,7 +78,8 @@ pub fn distribute_quadtree(corners: &[Corner], width: u32, height: u32, n: usize
             break;
         }
         if nodes.len() + 3 * splittable < n {
-            nodes = nodes.iter().flat_map(|nd| if nd.can_split() { nd.split(corners) } else { vec![nd.clone()] }).collect();
+            nodes =
+                nodes.iter().flat_map(|nd| if nd.can_split() { nd.split(corners) } else { vec![nd.clone()] }).collect();
             continue;
         }
         // Last round: split the fullest nodes one at a time until there are enough.
@@ -97,10 +98,8 @@ pub fn distribute_quadtree(corners: &[Corner], width: u32, height: u32, n: usize
         nodes = nodes.into_iter().zip(replace).flat_map(|(nd, r)| r.unwrap_or_else(|| vec![nd])).collect();
         break;
     }
-    let mut best: Vec<Corner> = nodes
-        .iter()
-        .map(|nd| nd.pts.iter().map(|&i| corners[i]).min_by(order).expect("nodes are non-empty"))
-        .collect();
+    let mut best: Vec<Corner> =
+        nodes.iter().map(|nd| nd.pts.iter().map(|&i| corners[i]).min_by(order).expect("nodes are non-empty")).collect();
     best.sort_by(order);
     best.truncate(n);
     best

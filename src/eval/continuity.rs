@@ -2,11 +2,11 @@
 //! improved Canny on the noisy standard images (and the clean ones): edge
 //! pixels A, 4-connected components B, 8-connected components C, C/B, C/A.
 
+use super::format::{Csv, csv_f, num, pct, table};
 use super::metrics::{EdgeStats, edge_survival};
 use super::noise::noisy_images;
-use super::plot::{Bars, Panel, figure};
-use super::format::{Csv, csv_f, num, pct, table};
 use super::output::write_section;
+use super::plot::{Bars, Panel, figure};
 use super::{Options, Result, Suite, create_dir, mean};
 use crate::baseline::canny::{CannyParams, canny};
 use crate::config::Config;

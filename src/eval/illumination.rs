@@ -4,15 +4,15 @@
 //! and keypoints (within 2.5 px) that survive them: improved Canny vs Canny,
 //! L-FAST vs FAST-9.
 
-use super::metrics::{Lighting, edge_survival, keypoint_survival};
-use super::plot::{Bars, Panel, figure};
 use super::format::{Csv, csv_f, num, pct, table};
+use super::metrics::{Lighting, edge_survival, keypoint_survival};
 use super::output::write_section;
-use serde::{Deserialize, Serialize};
+use super::plot::{Bars, Panel, figure};
 use super::{Detectors, NamedImage, Options, Result, Suite, colour_of, kitti_frames, label, load_standard, mean, stem};
 use crate::config::Config;
 use crate::cpu::CpuDetector;
 use crate::image::Plane;
+use serde::{Deserialize, Serialize};
 
 /// Mean survival of one method under one brightness change.
 #[derive(Clone, Debug, Serialize, Deserialize)]

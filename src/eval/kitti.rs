@@ -2,14 +2,14 @@
 //! keypoint count and extraction time of FAST-9, ORB and the L-FAST variants,
 //! and the time of the edge maps alone.
 
-use super::plot::{Panel, Series, figure};
 use super::format::{Csv, csv_f, num, table};
 use super::output::{load_average, machine, write_section};
-use serde::{Deserialize, Serialize};
+use super::plot::{Panel, Series, figure};
 use super::{Detectors, LFAST_L0, Options, Result, Suite, Variant, colour_of, kitti_frames, label, mean, median, stem};
 use crate::config::Config;
 use crate::cpu::CpuDetector;
 use crate::image::Plane;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// The paper's published means on KITTI (Figs 9-10): feature points per frame

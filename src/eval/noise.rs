@@ -2,10 +2,10 @@
 //! images; PSNR and SNR against the clean image of the noisy image, the
 //! Gaussian (5x5, sigma 0.8) and the flagged median (SPEC 1).
 
-use super::metrics::{psnr, salt_and_pepper, seed_for, snr};
-use super::plot::{Bars, Panel, figure};
 use super::format::{Csv, csv_f, num, table};
+use super::metrics::{psnr, salt_and_pepper, seed_for, snr};
 use super::output::write_section;
+use super::plot::{Bars, Panel, figure};
 use super::{NamedImage, Options, Result, Suite, load_standard, mean};
 use crate::config::{Config, DELTA_DEN};
 use crate::cpu::blur::{gaussian_blur, gaussian_kernel_q8};

@@ -3,15 +3,15 @@
 //! 2..N through the given homographies, for L-FAST, FAST-9 and ORB, with
 //! every keypoint and at equal budgets (top N by response).
 
-use super::metrics::{PairScore, read_homography, score_pair};
-use super::plot::{Panel, Series, figure};
 use super::format::{Csv, csv_f, pct, table};
+use super::metrics::{PairScore, read_homography, score_pair};
 use super::output::write_section;
-use serde::{Deserialize, Serialize};
+use super::plot::{Panel, Series, figure};
 use super::{Detectors, EvalError, Options, Result, Suite, colour_of, image_files, label, mean, stem};
 use crate::image::Plane;
 use crate::keypoint::{Descriptor, KeyPoint};
 use nalgebra::Matrix3;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 

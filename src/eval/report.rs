@@ -11,11 +11,11 @@ use super::format::table;
 use super::illumination::IllumSummary;
 use super::kitti::KittiSummary;
 use super::noise::NoiseSummary;
+use super::output::read_summary;
 use super::repeatability::RepeatSummary;
 use super::vo::VoSummary;
-use crate::config::Config;
-use super::output::read_summary;
 use super::{EvalError, Result, Suite, Variant, write_text};
+use crate::config::Config;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

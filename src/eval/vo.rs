@@ -3,9 +3,9 @@
 //! FAST-9, ORB and the four L-FAST variants; the absolute trajectory error
 //! after SE(3) and Sim(3) alignment, counts and times. Everything on the CPU.
 
-use super::plot::{Bars, Panel, figure};
 use super::format::{Csv, csv_f, num, table};
 use super::output::write_section;
+use super::plot::{Bars, Panel, figure};
 use super::{EvalError, Options, Result, Suite, Variant, colour_of, label};
 use crate::vo::{FrontEnd, SuiteTable, VoOptions};
 use serde::{Deserialize, Serialize};

@@ -9,12 +9,8 @@ use crate::error::Result;
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/blur.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] = &[
-    PARAMS,
-    b(1, "gray", Slot::Read),
-    b(2, "blur_tmp", Slot::ReadWrite),
-    b(3, "smoothed", Slot::ReadWrite),
-];
+pub const BINDINGS: &[Binding] =
+    &[PARAMS, b(1, "gray", Slot::Read), b(2, "blur_tmp", Slot::ReadWrite), b(3, "smoothed", Slot::ReadWrite)];
 
 /// The 7x7 Gaussian blur pass.
 #[derive(Debug)]
@@ -33,33 +29,19 @@ impl Pass for BlurPass {
             source: wgpu::ShaderSource::Wgsl(full_source(SOURCE).into()),
         });
         Self {
-            horizontal: Kernel::from_module(
-                device,
-                "blur horizontal",
-                &module,
-                "horizontal",
-                BINDINGS,
-            ),
+            horizontal: Kernel::from_module(device, "blur horizontal", &module, "horizontal", BINDINGS),
             vertical: Kernel::from_module(device, "blur vertical", &module, "vertical", BINDINGS),
         }
     }
 
     fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
         // Both kernels have the same layout entries, so one bind group serves both.
-        self.horizontal.bind(
-            device,
-            &[
-                ("P", &b.params),
-                ("gray", &b.gray),
-                ("blur_tmp", &b.blur_tmp),
-                ("smoothed", &b.smooth),
-            ],
-        )
+        self.horizontal
+            .bind(device, &[("P", &b.params), ("gray", &b.gray), ("blur_tmp", &b.blur_tmp), ("smoothed", &b.smooth)])
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.horizontal
-            .dispatch(pass, bound, b.layout.pixel_groups());
+        self.horizontal.dispatch(pass, bound, b.layout.pixel_groups());
         self.vertical.dispatch(pass, bound, b.layout.pixel_groups());
     }
 }

@@ -5,9 +5,9 @@ use super::kernel::DYNAMIC_STRIDE;
 use super::kernel::init_buffer;
 use super::layout::{FrameLayout, MAX_LEVELS, MAX_WINDOWS_PER_AXIS, TILE_ROW};
 use crate::config::Config;
+use crate::error::{Error, Result};
 use crate::spec::angle::AngleBins;
 use crate::spec::pattern::{Pattern, RotatedPatterns};
-use crate::error::{Error, Result};
 use bytemuck::{Pod, Zeroable};
 
 /// One keypoint as the GPU stores it (48 bytes; `shaders/select.wgsl`'s `Kp`).
@@ -249,7 +249,8 @@ impl Buffers {
                 mapped_at_creation: false,
             })
         };
-        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| init_buffer(device, label, contents, usage);
+        let init =
+            |label: &str, contents: &[u8], usage: wgpu::BufferUsages| init_buffer(device, label, contents, usage);
         let px = |label: &str| buf(label, px_bytes);
         let n_levels = layout.n_levels() as u64;
         let mut level_index = vec![0u8; MAX_LEVELS * DYNAMIC_STRIDE as usize];
@@ -270,7 +271,11 @@ impl Buffers {
         indirect_init[8] = 4;
         indirect_init[14] = 1;
         let this = Self {
-            params: init("params", bytemuck::bytes_of(&layout.params), wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST),
+            params: init(
+                "params",
+                bytemuck::bytes_of(&layout.params),
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            ),
             level_index: init("level_index", &level_index, wgpu::BufferUsages::UNIFORM),
             input: buf("input", (width as u64 * height as u64).next_multiple_of(4)),
             gray: px("gray"),
@@ -297,11 +302,7 @@ impl Buffers {
             keypoints: buf("keypoints", cap * KP_WORDS * 4),
             descriptors: buf("descriptors", cap * DESC_WORDS * 4),
             counters: buf("counters", counter::LEN as u64 * 4),
-            indirect: init(
-                "indirect",
-                bytemuck::cast_slice(&indirect_init),
-                storage | wgpu::BufferUsages::INDIRECT,
-            ),
+            indirect: init("indirect", bytemuck::cast_slice(&indirect_init), storage | wgpu::BufferUsages::INDIRECT),
             smooth: px("smooth"),
             blur_tmp: px("blur_tmp"),
             patterns: init("patterns", bytemuck::cast_slice(&patterns), storage),

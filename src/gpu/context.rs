@@ -175,10 +175,7 @@ impl GpuContext {
         let adapter = match opts.name() {
             Some(name) => named_adapter(&inst, opts, &name).await?,
             None => inst
-                .request_adapter(&wgpu::RequestAdapterOptions {
-                    power_preference: opts.power(),
-                    ..Default::default()
-                })
+                .request_adapter(&wgpu::RequestAdapterOptions { power_preference: opts.power(), ..Default::default() })
                 .await
                 .map_err(|e| Error::NoAdapter { reason: e.to_string() })?,
         };
@@ -201,7 +198,9 @@ impl GpuContext {
                         .filter(|&i| is_hardware(&infos[i]))
                         .min_by_key(|&i| rank(&infos[i], opts.power()))
                         .ok_or_else(|| Error::NoAdapter { reason: no_hardware_reason(&infos) })?;
-                    all.into_iter().nth(best).ok_or_else(|| Error::NoAdapter { reason: "adapter list changed".into() })?
+                    all.into_iter()
+                        .nth(best)
+                        .ok_or_else(|| Error::NoAdapter { reason: "adapter list changed".into() })?
                 }
             };
             Self::open(adapter).await

@@ -11,13 +11,13 @@ use super::buffers::{Buffers, DESC_WORDS, GpuKeypoint, KP_WORDS};
 use super::context::{GpuContext, map_blocking};
 use super::readback::Slot;
 pub use super::readback::{Frame, Ticket};
-use super::stages::{Bound, Passes, Timestamps};
 pub use super::stages::STAGES;
+use super::stages::{Bound, Passes, Timestamps};
 use crate::config::Config;
-use crate::spec::{self, angle, level_mask};
 use crate::error::{Error, Result};
 use crate::image::{GrayView, Plane};
 use crate::keypoint::KeyPoint;
+use crate::spec::{self, angle, level_mask};
 
 /// Where a frame comes from.
 #[derive(Clone, Copy, Debug)]
@@ -146,7 +146,12 @@ impl GpuDetector {
         ctx.check_lost_polled()?;
         let need = super::SHADERS
             .iter()
-            .map(|s| s.bindings.iter().filter(|b| matches!(b.slot, super::kernel::Slot::Read | super::kernel::Slot::ReadWrite)).count())
+            .map(|s| {
+                s.bindings
+                    .iter()
+                    .filter(|b| matches!(b.slot, super::kernel::Slot::Read | super::kernel::Slot::ReadWrite))
+                    .count()
+            })
             .max()
             .unwrap_or(0) as u32;
         let have = ctx.device.limits().max_storage_buffers_per_shader_stage;
@@ -238,7 +243,12 @@ impl GpuDetector {
             Some(m) => {
                 m.check()?;
                 if (m.width(), m.height()) != (w, h) {
-                    return Err(Error::MaskSize { mask_width: m.width(), mask_height: m.height(), width: w, height: h });
+                    return Err(Error::MaskSize {
+                        mask_width: m.width(),
+                        mask_height: m.height(),
+                        width: w,
+                        height: h,
+                    });
                 }
                 let m = m.to_plane();
                 let mut words = vec![0u32; b.layout.total_px as usize];
@@ -366,4 +376,3 @@ impl GpuDetector {
         map_blocking(&self.ctx, staging, len)
     }
 }
-

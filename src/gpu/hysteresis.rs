@@ -47,32 +47,15 @@ impl Pass for HysteresisPass {
         });
         let kernels = ENTRIES
             .iter()
-            .map(|e| {
-                Kernel::from_module(
-                    device,
-                    &format!("{}::{e}", Self::NAME),
-                    &module,
-                    e,
-                    BINDINGS,
-                )
-            })
+            .map(|e| Kernel::from_module(device, &format!("{}::{e}", Self::NAME), &module, e, BINDINGS))
             .collect();
         Self { kernels }
     }
 
     fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<HysteresisBound> {
-        let buffers = [
-            ("P", &b.params),
-            ("ruled", &b.ruled),
-            ("labels", &b.labels),
-            ("flags", &b.flags),
-            ("edges", &b.edges),
-        ];
-        let groups = self
-            .kernels
-            .iter()
-            .map(|k| k.bind(device, &buffers))
-            .collect::<Result<Vec<_>>>()?;
+        let buffers =
+            [("P", &b.params), ("ruled", &b.ruled), ("labels", &b.labels), ("flags", &b.flags), ("edges", &b.edges)];
+        let groups = self.kernels.iter().map(|k| k.bind(device, &buffers)).collect::<Result<Vec<_>>>()?;
         Ok(HysteresisBound { groups })
     }
 

@@ -62,7 +62,13 @@ pub struct Kernel {
 
 impl Kernel {
     /// Compiles entry point `entry` of `stage_source` (without the prelude).
-    pub fn new(device: &wgpu::Device, label: &str, stage_source: &str, entry: &str, bindings: &'static [Binding]) -> Self {
+    pub fn new(
+        device: &wgpu::Device,
+        label: &str,
+        stage_source: &str,
+        entry: &str,
+        bindings: &'static [Binding],
+    ) -> Self {
         let source = full_source(stage_source);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),
@@ -109,7 +115,8 @@ impl Kernel {
                 count: None,
             })
             .collect();
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries });
+        let layout =
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(label),
             bind_group_layouts: &[Some(&layout)],
@@ -150,14 +157,21 @@ impl Kernel {
                 let view = textures.iter().find(|(n, _)| *n == bd.name).map(|(_, t)| *t).ok_or_else(|| Error::Gpu {
                     reason: format!("pass {}: no texture given for binding `{}`", self.label, bd.name),
                 })?;
-                entries.push(wgpu::BindGroupEntry { binding: bd.binding, resource: wgpu::BindingResource::TextureView(view) });
+                entries.push(wgpu::BindGroupEntry {
+                    binding: bd.binding,
+                    resource: wgpu::BindingResource::TextureView(view),
+                });
                 continue;
             }
             let buf = buffers.iter().find(|(n, _)| *n == bd.name).map(|(_, b)| *b).ok_or_else(|| Error::Gpu {
                 reason: format!("pass {}: no buffer given for binding `{}`", self.label, bd.name),
             })?;
             let resource = if bd.slot == Slot::UniformDynamic {
-                wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: buf, offset: 0, size: wgpu::BufferSize::new(16) })
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: buf,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(16),
+                })
             } else {
                 buf.as_entire_binding()
             };
@@ -167,7 +181,11 @@ impl Kernel {
         if let Some(n) = names.clone().find(|n| !self.bindings.iter().any(|bd| bd.name == *n)) {
             return Err(Error::Gpu { reason: format!("pass {}: shader has no binding `{n}`", self.label) });
         }
-        Ok(device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&self.label), layout: &self.layout, entries: &entries }))
+        Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&self.label),
+            layout: &self.layout,
+            entries: &entries,
+        }))
     }
 
     /// Sets the pipeline and bind group and dispatches `groups` workgroups.
@@ -192,7 +210,13 @@ impl Kernel {
 
     /// Dispatches with the workgroup counts read from `indirect` at `offset`
     /// (sized on the GPU by an earlier pass, e.g. by the keypoint count).
-    pub fn dispatch_indirect(&self, pass: &mut wgpu::ComputePass<'_>, bg: &wgpu::BindGroup, indirect: &wgpu::Buffer, offset: u64) {
+    pub fn dispatch_indirect(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        bg: &wgpu::BindGroup,
+        indirect: &wgpu::Buffer,
+        offset: u64,
+    ) {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bg, &[]);
         pass.dispatch_workgroups_indirect(indirect, offset);
@@ -205,7 +229,8 @@ impl Kernel {
 /// [`Error::DeviceLost`] at the next check.
 pub fn init_buffer(device: &wgpu::Device, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
     let size = (contents.len() as u64).next_multiple_of(4).max(4);
-    let buf = device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: true });
+    let buf =
+        device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: true });
     if let Ok(mut view) = buf.slice(..).get_mapped_range_mut() {
         view.slice(..contents.len()).copy_from_slice(contents);
     }

@@ -8,12 +8,8 @@ use super::pass::{Groups, simple_pass};
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/lfast.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] = &[
-    PARAMS,
-    b(1, "edges", Slot::Read),
-    b(2, "mask", Slot::Read),
-    b(3, "cand", Slot::ReadWrite),
-];
+pub const BINDINGS: &[Binding] =
+    &[PARAMS, b(1, "edges", Slot::Read), b(2, "mask", Slot::Read), b(3, "cand", Slot::ReadWrite)];
 
 simple_pass! {
     /// The L-FAST candidate pass.

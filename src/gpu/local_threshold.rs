@@ -8,12 +8,8 @@ use super::pass::{Groups, simple_pass};
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/local_threshold.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] = &[
-    PARAMS,
-    b(1, "m", Slot::Read),
-    b(2, "grid", Slot::Read),
-    b(3, "windows", Slot::ReadWrite),
-];
+pub const BINDINGS: &[Binding] =
+    &[PARAMS, b(1, "m", Slot::Read), b(2, "grid", Slot::Read), b(3, "windows", Slot::ReadWrite)];
 
 simple_pass! {
     /// The window statistics pass.

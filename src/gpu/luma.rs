@@ -24,11 +24,8 @@ pub const BYTES_BINDINGS: &[Binding] = &[PARAMS, INPUT, GRAY];
 pub const TEXTURE_BINDINGS: &[Binding] = &[PARAMS, GRAY, TEX, TEX_KIND];
 
 /// The texture formats [`LumaPass::bind_texture`] accepts.
-pub const TEXTURE_FORMATS: &[wgpu::TextureFormat] = &[
-    wgpu::TextureFormat::Rgba8Unorm,
-    wgpu::TextureFormat::Bgra8Unorm,
-    wgpu::TextureFormat::R8Unorm,
-];
+pub const TEXTURE_FORMATS: &[wgpu::TextureFormat] =
+    &[wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureFormat::Bgra8Unorm, wgpu::TextureFormat::R8Unorm];
 
 /// The luma pass: gray bytes or a texture -> level 0 of `gray`.
 #[derive(Debug)]
@@ -64,31 +61,18 @@ impl LumaPass {
             return Err(Error::InvalidImage {
                 width: tex.width(),
                 height: tex.height(),
-                reason: format!(
-                    "the input texture must be {w}x{h}, the size the GPU buffers were made for"
-                ),
+                reason: format!("the input texture must be {w}x{h}, the size the GPU buffers were made for"),
             });
         }
         if !tex.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
-            return Err(Error::Gpu {
-                reason: "the input texture lacks TextureUsages::TEXTURE_BINDING".into(),
-            });
+            return Err(Error::Gpu { reason: "the input texture lacks TextureUsages::TEXTURE_BINDING".into() });
         }
         let kind = &self.kinds[(format == wgpu::TextureFormat::R8Unorm) as usize];
-        self.texture.bind_with(
-            device,
-            &[("P", &b.params), ("gray", &b.gray), ("tex_kind", kind)],
-            &[("tex", view)],
-        )
+        self.texture.bind_with(device, &[("P", &b.params), ("gray", &b.gray), ("tex_kind", kind)], &[("tex", view)])
     }
 
     /// Records the texture path with a bind group from [`bind_texture`](Self::bind_texture).
-    pub fn record_texture(
-        &self,
-        pass: &mut wgpu::ComputePass<'_>,
-        bound: &wgpu::BindGroup,
-        b: &Buffers,
-    ) {
+    pub fn record_texture(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
         self.texture.dispatch(pass, bound, b.layout.level_groups(0));
     }
 }
@@ -103,33 +87,23 @@ impl Pass for LumaPass {
             source: wgpu::ShaderSource::Wgsl(full_source(SOURCE).into()),
         });
         let kind = |v: u32| {
-            super::kernel::init_buffer(device, "luma tex_kind", bytemuck::cast_slice(&[v, 0u32, 0, 0]), wgpu::BufferUsages::UNIFORM)
+            super::kernel::init_buffer(
+                device,
+                "luma tex_kind",
+                bytemuck::cast_slice(&[v, 0u32, 0, 0]),
+                wgpu::BufferUsages::UNIFORM,
+            )
         };
         Self {
-            bytes: Kernel::from_module(
-                device,
-                "luma from_bytes",
-                &module,
-                "from_bytes",
-                BYTES_BINDINGS,
-            ),
-            texture: Kernel::from_module(
-                device,
-                "luma from_texture",
-                &module,
-                "from_texture",
-                TEXTURE_BINDINGS,
-            ),
+            bytes: Kernel::from_module(device, "luma from_bytes", &module, "from_bytes", BYTES_BINDINGS),
+            texture: Kernel::from_module(device, "luma from_texture", &module, "from_texture", TEXTURE_BINDINGS),
             kinds: [kind(0), kind(1)],
         }
     }
 
     /// Binds the byte path: `input` (written by the host) -> `gray` level 0.
     fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
-        self.bytes.bind(
-            device,
-            &[("P", &b.params), ("input", &b.input), ("gray", &b.gray)],
-        )
+        self.bytes.bind(device, &[("P", &b.params), ("input", &b.input), ("gray", &b.gray)])
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {

@@ -14,9 +14,9 @@
 
 use super::context::GpuContext;
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b, full_source, init_buffer};
-use crate::spec::matching::{Match, MatchOptions, NO_INDEX};
 use crate::error::{Error, Result};
 use crate::keypoint::Descriptor;
+use crate::spec::matching::{Match, MatchOptions, NO_INDEX};
 use std::sync::Mutex;
 
 /// The shader source (without the common prelude).

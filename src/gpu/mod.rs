@@ -38,9 +38,9 @@ pub mod stages;
 pub use buffers::{Buffers, GpuKeypoint};
 pub use context::{AutoChoice, GpuContext, GpuOptions, auto_choice, is_hardware, is_software, list_adapters};
 pub use detector::{GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
-pub use readback::{Frame, Ticket};
 pub use layout::FrameLayout;
 pub use pass::Pass;
+pub use readback::{Frame, Ticket};
 pub use stages::{SHADERS, STAGES};
 
 use kernel::Binding;

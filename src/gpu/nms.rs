@@ -7,13 +7,8 @@ use super::pass::{Groups, simple_pass};
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/nms.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] = &[
-    PARAMS,
-    b(1, "gx", Slot::Read),
-    b(2, "gy", Slot::Read),
-    b(3, "s", Slot::Read),
-    b(4, "nms", Slot::ReadWrite),
-];
+pub const BINDINGS: &[Binding] =
+    &[PARAMS, b(1, "gx", Slot::Read), b(2, "gy", Slot::Read), b(3, "s", Slot::Read), b(4, "nms", Slot::ReadWrite)];
 
 simple_pass! {
     /// The gradient non-maximum suppression pass.

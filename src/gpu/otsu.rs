@@ -8,11 +8,7 @@ use super::pass::{Groups, simple_pass};
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/otsu.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] = &[
-    PARAMS,
-    b(1, "hist", Slot::Read),
-    b(2, "otsu", Slot::ReadWrite),
-];
+pub const BINDINGS: &[Binding] = &[PARAMS, b(1, "hist", Slot::Read), b(2, "otsu", Slot::ReadWrite)];
 
 simple_pass! {
     /// Otsu's threshold per level: one workgroup of 256 invocations per level.

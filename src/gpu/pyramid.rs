@@ -11,11 +11,7 @@ use crate::image::MAX_SIDE;
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/pyramid.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] = &[
-    PARAMS,
-    b(1, "level_index", Slot::UniformDynamic),
-    b(2, "gray", Slot::ReadWrite),
-];
+pub const BINDINGS: &[Binding] = &[PARAMS, b(1, "level_index", Slot::UniformDynamic), b(2, "gray", Slot::ReadWrite)];
 
 /// The pyramid pass.
 #[derive(Debug)]
@@ -28,9 +24,7 @@ impl Pass for PyramidPass {
     const NAME: &'static str = "pyramid";
 
     fn new(device: &wgpu::Device) -> Self {
-        Self {
-            kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS),
-        }
+        Self { kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS) }
     }
 
     /// Fails for a level 0 side over [`MAX_SIDE`]: the shader's 32-bit tap
@@ -44,24 +38,12 @@ impl Pass for PyramidPass {
                 reason: format!("a side exceeds the limit of {MAX_SIDE} pixels"),
             });
         }
-        self.kernel.bind(
-            device,
-            &[
-                ("P", &b.params),
-                ("level_index", &b.level_index),
-                ("gray", &b.gray),
-            ],
-        )
+        self.kernel.bind(device, &[("P", &b.params), ("level_index", &b.level_index), ("gray", &b.gray)])
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
         for l in 1..b.layout.sizes.len() {
-            self.kernel.dispatch_at(
-                pass,
-                bound,
-                l as u32 * DYNAMIC_STRIDE as u32,
-                b.layout.level_groups(l),
-            );
+            self.kernel.dispatch_at(pass, bound, l as u32 * DYNAMIC_STRIDE as u32, b.layout.level_groups(l));
         }
     }
 }

@@ -158,7 +158,8 @@ impl GpuDetector {
             return Err(Error::Gpu { reason: format!("map_async: {e}") });
         }
         let frame = {
-            let view = slot.staging.slice(..).get_mapped_range().map_err(|e| Error::Gpu { reason: format!("{e:?}") })?;
+            let view =
+                slot.staging.slice(..).get_mapped_range().map_err(|e| Error::Gpu { reason: format!("{e:?}") })?;
             parse_frame(&self.cfg, &view, slot.copied, profiled, self.ctx.queue.get_timestamp_period())
         };
         slot.staging.unmap();
@@ -171,7 +172,8 @@ impl GpuDetector {
             let all = spill.size() / ((KP_WORDS + DESC_WORDS) * 4);
             let (from, to) = (slot.copied, frame.count.min(all));
             let kps = self.ctx.read_range(spill, from * KP_WORDS * 4, (to - from) * KP_WORDS * 4)?;
-            let descs = self.ctx.read_range(spill, all * KP_WORDS * 4 + from * DESC_WORDS * 4, (to - from) * DESC_WORDS * 4)?;
+            let descs =
+                self.ctx.read_range(spill, all * KP_WORDS * 4 + from * DESC_WORDS * 4, (to - from) * DESC_WORDS * 4)?;
             let raw: Vec<GpuKeypoint> = bytemuck::pod_collect_to_vec(&kps);
             frame.keypoints.extend(raw.iter().map(|k| to_keypoint(&self.cfg, k)));
             frame.raw.extend(raw);
@@ -195,7 +197,9 @@ impl GpuDetector {
 fn ticket_slot(ws: &mut GpuWorkspace, t: Ticket) -> Result<&mut Slot> {
     match ws.ring.get_mut(t.slot) {
         Some(s) if s.generation == t.generation => Ok(s),
-        Some(_) => Err(Error::Gpu { reason: format!("stale readback ticket (slot {} was reused by a later frame)", t.slot) }),
+        Some(_) => {
+            Err(Error::Gpu { reason: format!("stale readback ticket (slot {} was reused by a later frame)", t.slot) })
+        }
         None => Err(Error::Gpu { reason: format!("unknown readback ticket (slot {})", t.slot) }),
     }
 }
@@ -222,10 +226,8 @@ fn parse_frame(cfg: &Config, bytes: &[u8], slots: u64, ts: bool, period_ns: f32)
     let kp_off = 16;
     let desc_off = kp_off + slots as usize * KP_WORDS as usize * 4;
     let raw: Vec<GpuKeypoint> = bytemuck::pod_collect_to_vec(&bytes[kp_off..kp_off + n * KP_WORDS as usize * 4]);
-    let descriptors: Vec<Descriptor> = bytes[desc_off..desc_off + n * 32]
-        .chunks_exact(32)
-        .map(|c| c.try_into().unwrap_or([0; 32]))
-        .collect();
+    let descriptors: Vec<Descriptor> =
+        bytes[desc_off..desc_off + n * 32].chunks_exact(32).map(|c| c.try_into().unwrap_or([0; 32])).collect();
     let keypoints = raw.iter().map(|k| to_keypoint(cfg, k)).collect();
     let mut pass_ms = Vec::new();
     if ts {

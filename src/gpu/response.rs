@@ -8,12 +8,8 @@ use super::pass::{Groups, simple_pass};
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/response.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] = &[
-    PARAMS,
-    b(1, "cand", Slot::Read),
-    b(2, "denoised", Slot::Read),
-    b(3, "resp", Slot::ReadWrite),
-];
+pub const BINDINGS: &[Binding] =
+    &[PARAMS, b(1, "cand", Slot::Read), b(2, "denoised", Slot::Read), b(3, "resp", Slot::ReadWrite)];
 
 simple_pass! {
     /// The Harris response pass.

@@ -8,11 +8,7 @@ use super::pass::{Groups, simple_pass};
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/rules.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] = &[
-    PARAMS,
-    b(1, "classes", Slot::Read),
-    b(2, "ruled", Slot::ReadWrite),
-];
+pub const BINDINGS: &[Binding] = &[PARAMS, b(1, "classes", Slot::Read), b(2, "ruled", Slot::ReadWrite)];
 
 simple_pass! {
     /// The isolated-edge suppression pass (rules 1 and 2).

@@ -60,15 +60,8 @@ impl Pass for SelectPass {
             label: Some(Self::NAME),
             source: wgpu::ShaderSource::Wgsl(super::kernel::full_source(SOURCE).into()),
         });
-        let k = |entry: &str, bindings| {
-            Kernel::from_module(
-                device,
-                &format!("select::{entry}"),
-                &module,
-                entry,
-                bindings,
-            )
-        };
+        let k =
+            |entry: &str, bindings| Kernel::from_module(device, &format!("select::{entry}"), &module, entry, bindings);
         Self {
             args: k("args", BINDINGS),
             rank_level: k("rank_level", RANK_BINDINGS),
@@ -87,18 +80,13 @@ impl Pass for SelectPass {
         ];
         let mut full = common.to_vec();
         full.push(("indirect", &b.indirect));
-        Ok(SelectBound {
-            full: self.args.bind(device, &full)?,
-            rank: self.rank_level.bind(device, &common)?,
-        })
+        Ok(SelectBound { full: self.args.bind(device, &full)?, rank: self.rank_level.bind(device, &common)? })
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &SelectBound, b: &Buffers) {
         self.args.dispatch(pass, &bound.full, [1, 1, 1]);
-        self.rank_level
-            .dispatch_indirect(pass, &bound.rank, &b.indirect, indirect::CORNERS);
-        self.place
-            .dispatch_indirect(pass, &bound.rank, &b.indirect, indirect::CORNERS);
+        self.rank_level.dispatch_indirect(pass, &bound.rank, &b.indirect, indirect::CORNERS);
+        self.place.dispatch_indirect(pass, &bound.rank, &b.indirect, indirect::CORNERS);
         self.finish.dispatch(pass, &bound.full, [1, 1, 1]);
     }
 }

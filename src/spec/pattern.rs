@@ -42,7 +42,10 @@ impl Pattern {
             pairs.push([v[0], v[1], v[2], v[3]]);
         }
         if pairs.len() != 256 {
-            return Err(Error::Pattern { line: text.lines().count(), reason: format!("expected 256 rows, found {}", pairs.len()) });
+            return Err(Error::Pattern {
+                line: text.lines().count(),
+                reason: format!("expected 256 rows, found {}", pairs.len()),
+            });
         }
         Ok(Self { pairs })
     }
