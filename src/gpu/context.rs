@@ -75,7 +75,7 @@ pub enum AutoChoice {
     /// (`named`, software allowed), or the best hardware adapter.
     Gpu {
         /// The adapter.
-        info: wgpu::AdapterInfo,
+        info: Box<wgpu::AdapterInfo>,
         /// True when it was chosen by name.
         named: bool,
     },
@@ -143,14 +143,14 @@ pub fn auto_choice(opts: &GpuOptions) -> AutoChoice {
     if let Some(name) = opts.name() {
         let want = name.to_lowercase();
         return match infos.into_iter().find(|i| i.name.to_lowercase().contains(&want)) {
-            Some(info) => AutoChoice::Gpu { info, named: true },
+            Some(info) => AutoChoice::Gpu { info: Box::new(info), named: true },
             None => AutoChoice::Cpu(format!("no adapter named like `{name}`")),
         };
     }
     let power = opts.power();
     let best = infos.iter().filter(|i| is_hardware(i)).min_by_key(|i| rank(i, power)).cloned();
     match best {
-        Some(info) => AutoChoice::Gpu { info, named: false },
+        Some(info) => AutoChoice::Gpu { info: Box::new(info), named: false },
         None => AutoChoice::Cpu(no_hardware_reason(&infos)),
     }
 }
