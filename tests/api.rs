@@ -9,6 +9,7 @@ use lfast::baseline::canny::{CannyParams, canny};
 use lfast::baseline::fast::fast9;
 use lfast::baseline::orb::{OrbDetector, OrbParams};
 use lfast::cpu::CpuDetector;
+use lfast::spec::keypoint_level_pixel;
 use lfast::{Config, Descriptor, Error, GrayView, KeyPoint, Mode, Plane};
 
 fn load(name: &str) -> Plane<u8> {
@@ -21,12 +22,6 @@ fn camera() -> Plane<u8> {
 
 fn det(cfg: Config) -> CpuDetector {
     CpuDetector::new(cfg).unwrap()
-}
-
-/// The level pixel (x, y) of an L-FAST keypoint: pt = ((x + 0.5) s, (y + 0.5) s).
-fn level_xy(k: &KeyPoint, scale_factor: f64) -> (u32, u32) {
-    let s = scale_factor.powi(k.octave) as f32;
-    ((k.pt.x / s - 0.5).round() as u32, (k.pt.y / s - 0.5).round() as u32)
 }
 
 /// A deterministic pseudo-random image with some structure (blocks + noise).
@@ -113,13 +108,13 @@ fn check_fields_and_order(kps: &[KeyPoint], cfg: &Config, what: &str) {
             assert!((f - 0.5).abs() < 1e-3, "{what} {i}: pt/s = {v} is not a pixel centre: {k:?}");
         }
         // inside the border at its level
-        let (x, y) = level_xy(k, cfg.scale_factor);
+        let (x, y) = keypoint_level_pixel(&cfg, k);
         assert!(x >= cfg.border && y >= cfg.border, "{what} {i}: ({x},{y}) inside the border: {k:?}");
     }
     for (i, w) in kps.windows(2).enumerate() {
         let (a, b) = (&w[0], &w[1]);
-        let ka = (-a.response, a.octave, level_xy(a, cfg.scale_factor).1, level_xy(a, cfg.scale_factor).0);
-        let kb = (-b.response, b.octave, level_xy(b, cfg.scale_factor).1, level_xy(b, cfg.scale_factor).0);
+        let ka = (-a.response, a.octave, keypoint_level_pixel(&cfg, a).1, keypoint_level_pixel(&cfg, a).0);
+        let kb = (-b.response, b.octave, keypoint_level_pixel(&cfg, b).1, keypoint_level_pixel(&cfg, b).0);
         assert!(ka.partial_cmp(&kb) == Some(std::cmp::Ordering::Less), "{what}: order broken at {i}: {a:?} then {b:?}");
     }
 }
@@ -134,7 +129,7 @@ fn output_order_and_keypoint_fields() {
             check_fields_and_order(&kps, &cfg, name);
             // keypoints lie inside the image, more than `border` level pixels from the far side
             for k in &kps {
-                let (x, y) = level_xy(k, cfg.scale_factor);
+                let (x, y) = keypoint_level_pixel(&cfg, k);
                 let (w, h) = cfg.level_sizes(img.width, img.height)[k.octave as usize];
                 assert!(x + cfg.border < w && y + cfg.border < h, "{name}: {k:?} in level {w}x{h}");
             }
@@ -263,7 +258,7 @@ fn masks() {
     assert!(r >= 15, "mask radius {r} must cover the orientation disc");
     for k in &kl {
         assert!(k.pt.x < half as f32, "{k:?}");
-        let (x, _) = level_xy(k, cfg.scale_factor);
+        let (x, _) = keypoint_level_pixel(&cfg, k);
         let lw = sizes[k.octave as usize].0 as u64;
         // last input column under level pixel x + r: ceil((x + r + 1) * W / lw) - 1 must be on
         let last_input = ((x as u64 + r as u64 + 1) * w as u64).div_ceil(lw) - 1;

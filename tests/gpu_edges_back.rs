@@ -2,6 +2,7 @@
 //! bit for bit: each GPU stage alone, fed the CPU output of the stage before.
 
 mod common;
+use common::TestRng as XorRng;
 
 use common::crop;
 use lfast::cpu::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
@@ -16,25 +17,6 @@ use lfast::testing as t;
 use lfast::{Config, Mode, Plane};
 
 // ---------------------------------------------------------------- helpers
-
-/// A small deterministic generator (xorshift64*).
-struct XorRng(u64);
-
-impl XorRng {
-    fn new(seed: u64) -> Self {
-        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    /// Uniform in 0..n.
-    fn below(&mut self, n: u32) -> u32 {
-        ((self.next() >> 32) % n as u64) as u32
-    }
-}
 
 fn plane(w: u32, h: u32, data: Vec<u8>) -> Plane<u8> {
     Plane::from_vec(w, h, data).expect("plane size")

@@ -4,6 +4,7 @@
 //! several pyramid levels, then all six chained on the GPU from `denoised`.
 
 mod common;
+use common::TestRng as Rng;
 
 use common::crop;
 use lfast::cpu::classify::{NONE, STRONG};
@@ -123,16 +124,16 @@ fn gradient_matches_cpu_on_noise() {
     let pass = GradientPass::new(&ctx.device);
     let cfg = Config { n_levels: 1, ..Config::default() };
     let (w, h) = (200u32, 150u32);
-    let mut r = Rng(3);
+    let mut r = Rng::new(3);
     // Mostly 0 / 255 so the extremes are frequent, the rest uniform.
     let d = Plane::<u8>::from_vec(
         w,
         h,
         (0..w * h)
-            .map(|_| match r.below(3) {
+            .map(|_| match r.below_u64(3) {
                 0 => 0,
                 1 => 255,
-                _ => r.below(256) as u8,
+                _ => r.below_u64(256) as u8,
             })
             .collect(),
     )
@@ -180,15 +181,15 @@ fn nms_sector_boundaries_and_ties() {
     let cfg = Config { n_levels: 1, ..Config::default() };
     let (w, h) = (45u32, 35u32);
     let pairs = [(1000, 414), (1000, 415), (415, 1000), (414, 1000), (5, 5), (0, 0), (0, 7), (7, 0), (510, 0), (1, 1)];
-    let mut r = Rng(11);
+    let mut r = Rng::new(11);
     let mut gx = Vec::new();
     let mut gy = Vec::new();
     for _ in 0..w * h {
-        let (a, b) = pairs[r.below(pairs.len() as u64) as usize];
-        gx.push(if r.below(2) == 0 { a } else { -a });
-        gy.push(if r.below(2) == 0 { b } else { -b });
+        let (a, b) = pairs[r.below_u64(pairs.len() as u64) as usize];
+        gx.push(if r.below_u64(2) == 0 { a } else { -a });
+        gy.push(if r.below_u64(2) == 0 { b } else { -b });
     }
-    let s: Vec<u32> = (0..w * h).map(|_| r.below(4) as u32).collect();
+    let s: Vec<u32> = (0..w * h).map(|_| r.below_u64(4) as u32).collect();
     let g = cpu::gradient::Gradient {
         gx2: Plane::from_vec(w, h, gx).unwrap(),
         gy2: Plane::from_vec(w, h, gy).unwrap(),
@@ -262,21 +263,6 @@ fn otsu_matches_cpu_on_images() {
 }
 
 /// A seeded generator (splitmix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-}
 
 /// Largest image of docs/algorithm.md: 16384 x 16384 = 2^28 pixels.
 const MAX_PX: u64 = 1 << 28;
@@ -288,57 +274,57 @@ fn random_histogram(r: &mut Rng, kind: u64) -> [u32; 256] {
         // empty
         0 => {}
         // one bin, any count up to the largest image
-        1 => h[r.below(256) as usize] = 1 + r.below(MAX_PX) as u32,
+        1 => h[r.below_u64(256) as usize] = 1 + r.below_u64(MAX_PX) as u32,
         // two bins anywhere, counts of any size
         2 => {
-            let a = r.below(256) as usize;
-            let b = r.below(256) as usize;
-            h[a] = 1 + r.below(MAX_PX / 2) as u32;
-            h[b] += 1 + r.below(MAX_PX / 2) as u32;
+            let a = r.below_u64(256) as usize;
+            let b = r.below_u64(256) as usize;
+            h[a] = 1 + r.below_u64(MAX_PX / 2) as u32;
+            h[b] += 1 + r.below_u64(MAX_PX / 2) as u32;
         }
         // two adjacent bins, very unequal
         3 => {
-            let a = r.below(255) as usize;
-            h[a] = 1 + r.below(MAX_PX - 1) as u32;
-            h[a + 1] = (1 + r.below(1000) as u32).min((MAX_PX - h[a] as u64) as u32);
+            let a = r.below_u64(255) as usize;
+            h[a] = 1 + r.below_u64(MAX_PX - 1) as u32;
+            h[a + 1] = (1 + r.below_u64(1000) as u32).min((MAX_PX - h[a] as u64) as u32);
         }
         // a few bins with huge counts
         4 => {
             let mut left = MAX_PX;
-            for _ in 0..1 + r.below(6) {
-                let c = r.below(left / 2 + 1);
-                h[r.below(256) as usize] += c as u32;
+            for _ in 0..1 + r.below_u64(6) {
+                let c = r.below_u64(left / 2 + 1);
+                h[r.below_u64(256) as usize] += c as u32;
                 left -= c;
             }
         }
         // dense small counts
-        5 => h.iter_mut().for_each(|c| *c = r.below(5000) as u32),
+        5 => h.iter_mut().for_each(|c| *c = r.below_u64(5000) as u32),
         // dense counts filling (nearly) the largest image
-        6 => h.iter_mut().for_each(|c| *c = r.below(MAX_PX / 256) as u32),
+        6 => h.iter_mut().for_each(|c| *c = r.below_u64(MAX_PX / 256) as u32),
         // symmetric around 127.5: the split at k and at 254 - k tie exactly
         7 => {
             for i in 0..128 {
-                let c = if r.below(3) == 0 { 0 } else { r.below(1 << 20) as u32 };
+                let c = if r.below_u64(3) == 0 { 0 } else { r.below_u64(1 << 20) as u32 };
                 h[i] = c;
                 h[255 - i] = c;
             }
         }
         // symmetric small clusters: ties among few candidates
         8 => {
-            let c = 1 + r.below(100) as u32;
-            let lo = r.below(120) as usize;
-            let gap = 1 + r.below(10) as usize;
+            let c = 1 + r.below_u64(100) as u32;
+            let lo = r.below_u64(120) as usize;
+            let gap = 1 + r.below_u64(10) as usize;
             h[lo] = c;
-            h[lo + gap] = 1 + r.below(50) as u32;
+            h[lo + gap] = 1 + r.below_u64(50) as u32;
             h[lo + 2 * gap] = c;
         }
         // a gradient-magnitude-like histogram: a big spike at 0 and a long tail
         _ => {
-            h[0] = r.below(MAX_PX / 2) as u32;
-            let mut c = r.below(1 << 22) + 1;
+            h[0] = r.below_u64(MAX_PX / 2) as u32;
+            let mut c = r.below_u64(1 << 22) + 1;
             for v in h.iter_mut().skip(1) {
                 *v = c as u32;
-                c = c * (900 + r.below(100)) / 1000;
+                c = c * (900 + r.below_u64(100)) / 1000;
             }
         }
     }
@@ -353,7 +339,7 @@ fn otsu_matches_cpu_on_random_histograms() {
     let pass = OtsuPass::new(&ctx.device);
     let cfg = Config { n_levels: 32, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 8, 8).unwrap();
-    let mut r = Rng(0x5eed);
+    let mut r = Rng::new(0x5eed);
     let mut fixed: Vec<[u32; 256]> = Vec::new();
     // The literal cases of src/cpu/otsu.rs and the extremes of the bound.
     let mut h = [0u32; 256];
@@ -442,13 +428,13 @@ fn local_threshold_clips_and_takes_lower_median() {
     let pass = LocalThresholdPass::new(&ctx.device);
     let cfg = Config { n_levels: 2, ..Config::default() };
     let (w, h) = (170u32, 90u32);
-    let mut r = Rng(77);
+    let mut r = Rng::new(77);
     let m0 = Plane::<u16>::from_vec(
         w,
         h,
         (0..w * h)
-            .map(|i| match r.below(4) {
-                0 => 200 + r.below(161) as u16,
+            .map(|i| match r.below_u64(4) {
+                0 => 200 + r.below_u64(161) as u16,
                 1 => 0,
                 _ => ((i % w) / 3) as u16,
             })

@@ -1,6 +1,9 @@
 //! GPU SPEC 9 stages (Harris response, corner NMS, select) against the CPU
 //! reference: each stage fed the CPU output of the stage before it, then the
 //! three chained.
+mod common;
+
+use common::TestRng as Rng;
 use lfast::Config;
 use lfast::cpu::lfast::{LfastParams, lfast};
 use lfast::cpu::select::{Corner, order, select};
@@ -19,20 +22,6 @@ const IMAGES: [&str; 5] =
 
 fn data(name: &str) -> Plane<u8> {
     load_gray(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)).unwrap()
-}
-
-/// xorshift32: deterministic test data without a dependency.
-struct Rng(u32);
-impl Rng {
-    fn next(&mut self) -> u32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 17;
-        self.0 ^= self.0 << 5;
-        self.0
-    }
-    fn below(&mut self, n: u32) -> u32 {
-        self.next() % n
-    }
 }
 
 /// A candidate map (1 = candidate) of a level from a list of positions.
@@ -158,7 +147,7 @@ fn response_matches_cpu_at_every_pixel() {
     let Some(ctx) = t::context() else { return };
     let pass = ResponsePass::new(&ctx.device);
     let noise = |w: u32, h: u32, seed: u32| {
-        let mut r = Rng(seed);
+        let mut r = Rng::new(seed.into());
         Plane::from_vec(w, h, (0..w * h).map(|_| if r.below(2) == 0 { 0 } else { 255 }).collect()).unwrap()
     };
     let mut cases: Vec<(Plane<u8>, u32)> = vec![
@@ -250,7 +239,7 @@ fn corner_nms_breaks_ties_by_position() {
         for r in [0, 1, 2, 4] {
             let cfg = Config { n_levels: levels, nms_radius: r, border: 7, ..Config::default() };
             let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
-            let mut rng = Rng(seed * 1000 + r + 1);
+            let mut rng = Rng::new((seed * 1000 + r + 1).into());
             let mut want = Vec::new();
             for (l, &(lw, lh)) in cfg.level_sizes(w, h).iter().enumerate() {
                 let mut cands = Vec::new();
@@ -319,7 +308,7 @@ fn corner_nms_literal() {
 /// Random corners of every level of `cfg` at `w x h`: unique positions,
 /// responses from a pool with ties, negatives, 0.0 and -0.0, and random ones.
 fn random_corners(cfg: &Config, w: u32, h: u32, n: usize, seed: u32) -> Vec<Corner> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed.into());
     let sizes = cfg.level_sizes(w, h);
     let pool = [0.0f32, -0.0, 1.0, -1.0, 2.5e-7, -3.0e-9, 1.0e-3, f32::MIN_POSITIVE, -f32::MIN_POSITIVE];
     let mut seen = std::collections::HashSet::new();
@@ -336,7 +325,7 @@ fn random_corners(cfg: &Config, w: u32, h: u32, n: usize, seed: u32) -> Vec<Corn
         let response = match rng.below(3) {
             0 => pool[rng.below(pool.len() as u32) as usize],
             1 => (rng.below(2000) as f32 - 1000.0) * 1.0e-6,
-            _ => f32::from_bits(rng.next() & 0xbfff_ffff), // finite, any sign and scale
+            _ => f32::from_bits(rng.next_u32() & 0xbfff_ffff), // finite, any sign and scale
         };
         out.push(Corner { level: l, x, y, response });
     }

@@ -1,6 +1,8 @@
 //! GPU stages SPEC 0 (luma), 10 (pyramid) and 11 (blur, orientation, ORB)
 //! against the CPU reference: bit for bit, except the f32 rotation of
 //! `orientation_bins = 0` (a few bits per descriptor) and the f32 angle.
+mod common;
+
 use lfast::cpu::orb::{Pattern, RotatedPatterns, describe, describe_continuous};
 use lfast::cpu::orientation::{AngleBins, angle_deg, moments};
 use lfast::cpu::{blur, pyramid};
@@ -15,17 +17,9 @@ use lfast::image::luma_bt601;
 use lfast::testing as t;
 use lfast::{Config, Descriptor, Error, Plane, hamming};
 
-/// xorshift bytes.
+/// Random bytes (the tests' one generator, tests/common).
 fn random_bytes(n: usize, seed: u32) -> Vec<u8> {
-    let mut s = seed.wrapping_mul(2654435761) | 1;
-    (0..n)
-        .map(|_| {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            (s >> 7) as u8
-        })
-        .collect()
+    common::random_bytes(n, seed.into())
 }
 
 fn level0(ctx: &GpuContext, b: &Buffers) -> Vec<u8> {

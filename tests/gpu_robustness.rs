@@ -81,14 +81,10 @@ fn identical(what: &str, a: &Frame, b: &Frame) -> Result<(), String> {
     Ok(())
 }
 
+/// A stream of random words (the tests' one generator, tests/common).
 fn xorshift(seed: u32) -> impl FnMut() -> u32 {
-    let mut s = seed.wrapping_mul(0x9E37_79B9) | 1;
-    move || {
-        s ^= s << 13;
-        s ^= s >> 17;
-        s ^= s << 5;
-        s
-    }
+    let mut r = common::TestRng::new(seed.into());
+    move || r.next_u32()
 }
 
 /// What an image of a property case holds.

@@ -11,6 +11,7 @@
 mod common;
 
 use common::plane_fn as plane;
+use lfast::spec::keypoint_level_pixel;
 #[path = "../fuzz/src/lib.rs"]
 mod fuzz_cases;
 
@@ -23,15 +24,9 @@ use std::path::{Path, PathBuf};
 
 // ---------------------------------------------------------------- helpers
 
-/// xorshift32 noise, every value 0..=255.
+/// Uniform noise, every value 0..=255 (the tests' one generator, tests/common).
 fn noise(w: u32, h: u32, seed: u32) -> Plane<u8> {
-    let mut s = seed | 1;
-    plane(w, h, |_, _| {
-        s ^= s << 13;
-        s ^= s >> 17;
-        s ^= s << 5;
-        (s >> 11) as u8
-    })
+    common::noise(w, h, seed.into())
 }
 
 fn checker(w: u32, h: u32, cell: u32) -> Plane<u8> {
@@ -71,12 +66,6 @@ impl Gpu {
         let ge = self.det.edge_image(&mut self.ws, img.view()).unwrap_or_else(|e| panic!("{what}: GPU edges: {e}"));
         assert_eq!(ge, cpu.edge_image(img.view()).unwrap(), "{what}: edge map GPU vs CPU");
     }
-}
-
-/// The level pixel (x, y) of an L-FAST keypoint: pt = ((x + 0.5) s, (y + 0.5) s).
-fn level_xy(k: &KeyPoint, scale_factor: f64) -> (u32, u32) {
-    let s = scale_factor.powi(k.octave);
-    ((k.pt.x as f64 / s).floor() as u32, (k.pt.y as f64 / s).floor() as u32)
 }
 
 /// Whether some level of a `w x h` image has a pixel `border` from every side.
@@ -203,7 +192,7 @@ fn pyramid_levels_that_shrink_below_the_border_are_skipped() {
     fuzz_cases::check_keypoints(&kps, &cfg, 200, 150, "200x150, 20 levels");
     for k in &kps {
         let (lw, lh) = sizes[k.octave as usize];
-        let (x, y) = level_xy(k, cfg.scale_factor);
+        let (x, y) = keypoint_level_pixel(&cfg, k);
         assert!(k.octave as usize <= last_interior, "{k:?}");
         assert!(x >= cfg.border && y >= cfg.border && x < lw - cfg.border && y < lh - cfg.border, "{k:?} on {lw}x{lh}");
     }

@@ -107,3 +107,46 @@ pub fn crop(img: &lfast::Plane<u8>, x0: u32, y0: u32, w: u32, h: u32) -> lfast::
     let (w, h) = (w.min(img.width - x0), h.min(img.height - y0));
     plane_fn(w, h, |x, y| img.at(x0 + x, y0 + y))
 }
+
+/// Test data from the crate's one generator, [`lfast::rng::SplitMix64`]:
+/// every test file draws its random inputs here (no local generators).
+pub struct TestRng(lfast::rng::SplitMix64);
+
+impl TestRng {
+    /// A generator started at `seed`.
+    pub fn new(seed: u64) -> Self {
+        Self(lfast::rng::SplitMix64::new(seed))
+    }
+
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0.next_u64()
+    }
+
+    /// The next 32 random bits (the high half of a 64-bit draw).
+    pub fn next_u32(&mut self) -> u32 {
+        (self.0.next_u64() >> 32) as u32
+    }
+
+    /// In `0..n` (`n > 0`), as `next_u64() % n`: test data, not statistics.
+    pub fn below(&mut self, n: u32) -> u32 {
+        (self.next_u64() % n as u64) as u32
+    }
+
+    /// [`below`](Self::below) for 64-bit bounds.
+    pub fn below_u64(&mut self, n: u64) -> u64 {
+        self.next_u64() % n
+    }
+}
+
+/// `n` random bytes from `seed`.
+pub fn random_bytes(n: usize, seed: u64) -> Vec<u8> {
+    let mut r = TestRng::new(seed);
+    (0..n).map(|_| r.next_u32() as u8).collect()
+}
+
+/// A `w x h` plane of uniform noise (every value 0..=255) from `seed`.
+pub fn noise(w: u32, h: u32, seed: u64) -> lfast::Plane<u8> {
+    let mut r = TestRng::new(seed);
+    plane_fn(w, h, |_, _| r.next_u32() as u8)
+}
