@@ -108,13 +108,13 @@ fn check_fields_and_order(kps: &[KeyPoint], cfg: &Config, what: &str) {
             assert!((f - 0.5).abs() < 1e-3, "{what} {i}: pt/s = {v} is not a pixel centre: {k:?}");
         }
         // inside the border at its level
-        let (x, y) = keypoint_level_pixel(&cfg, k);
+        let (x, y) = keypoint_level_pixel(cfg, k);
         assert!(x >= cfg.border && y >= cfg.border, "{what} {i}: ({x},{y}) inside the border: {k:?}");
     }
     for (i, w) in kps.windows(2).enumerate() {
         let (a, b) = (&w[0], &w[1]);
-        let ka = (-a.response, a.octave, keypoint_level_pixel(&cfg, a).1, keypoint_level_pixel(&cfg, a).0);
-        let kb = (-b.response, b.octave, keypoint_level_pixel(&cfg, b).1, keypoint_level_pixel(&cfg, b).0);
+        let ka = (-a.response, a.octave, keypoint_level_pixel(cfg, a).1, keypoint_level_pixel(cfg, a).0);
+        let kb = (-b.response, b.octave, keypoint_level_pixel(cfg, b).1, keypoint_level_pixel(cfg, b).0);
         assert!(ka.partial_cmp(&kb) == Some(std::cmp::Ordering::Less), "{what}: order broken at {i}: {a:?} then {b:?}");
     }
 }
@@ -258,7 +258,7 @@ fn masks() {
     assert!(r >= 15, "mask radius {r} must cover the orientation disc");
     for k in &kl {
         assert!(k.pt.x < half as f32, "{k:?}");
-        let (x, _) = keypoint_level_pixel(&cfg, k);
+        let (x, _) = keypoint_level_pixel(cfg, k);
         let lw = sizes[k.octave as usize].0 as u64;
         // last input column under level pixel x + r: ceil((x + r + 1) * W / lw) - 1 must be on
         let last_input = ((x as u64 + r as u64 + 1) * w as u64).div_ceil(lw) - 1;

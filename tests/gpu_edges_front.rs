@@ -262,8 +262,6 @@ fn otsu_matches_cpu_on_images() {
     }
 }
 
-/// A seeded generator (splitmix64).
-
 /// Largest image of docs/algorithm.md: 16384 x 16384 = 2^28 pixels.
 const MAX_PX: u64 = 1 << 28;
 
