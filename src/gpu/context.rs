@@ -114,13 +114,32 @@ fn instance(opts: &GpuOptions) -> wgpu::Instance {
     wgpu::Instance::new(desc)
 }
 
-async fn named_adapter(inst: &wgpu::Instance, opts: &GpuOptions, name: &str) -> Result<wgpu::Adapter> {
-    let all = inst.enumerate_adapters(opts.backends()).await;
-    let names: Vec<String> = all.iter().map(|a| a.get_info().name).collect();
+/// The first adapter whose name contains `name` (case-insensitive), else why not.
+fn index_named(infos: &[wgpu::AdapterInfo], name: &str) -> std::result::Result<usize, String> {
     let want = name.to_lowercase();
-    all.into_iter()
-        .find(|a| a.get_info().name.to_lowercase().contains(&want))
-        .ok_or_else(|| Error::NoAdapter { reason: format!("none named like `{name}` among {names:?}") })
+    infos.iter().position(|i| i.name.to_lowercase().contains(&want)).ok_or_else(|| {
+        let names: Vec<&str> = infos.iter().map(|i| i.name.as_str()).collect();
+        format!("none named like `{name}` among {names:?}")
+    })
+}
+
+/// The adapter `Backend::Auto` takes among `infos` and whether it was named
+/// (see [`GpuContext::new_auto`]), else why it takes none.
+fn auto_index(infos: &[wgpu::AdapterInfo], opts: &GpuOptions) -> std::result::Result<(usize, bool), String> {
+    if let Some(name) = opts.name() {
+        return index_named(infos, &name).map(|i| (i, true));
+    }
+    let power = opts.power();
+    (0..infos.len())
+        .filter(|&i| is_hardware(&infos[i]))
+        .min_by_key(|&i| rank(&infos[i], power))
+        .map(|i| (i, false))
+        .ok_or_else(|| no_hardware_reason(infos))
+}
+
+/// Takes adapter `i` of `all` (an index into its infos).
+fn take(all: Vec<wgpu::Adapter>, i: usize) -> Result<wgpu::Adapter> {
+    all.into_iter().nth(i).ok_or_else(|| Error::NoAdapter { reason: "adapter list changed".into() })
 }
 
 fn no_hardware_reason(infos: &[wgpu::AdapterInfo]) -> String {
@@ -139,19 +158,10 @@ fn no_hardware_reason(infos: &[wgpu::AdapterInfo]) -> String {
 
 /// What `Backend::Auto` would do with these options (for `lfast info`); opens nothing.
 pub fn auto_choice(opts: &GpuOptions) -> AutoChoice {
-    let infos = list_adapters(opts);
-    if let Some(name) = opts.name() {
-        let want = name.to_lowercase();
-        return match infos.into_iter().find(|i| i.name.to_lowercase().contains(&want)) {
-            Some(info) => AutoChoice::Gpu { info: Box::new(info), named: true },
-            None => AutoChoice::Cpu(format!("no adapter named like `{name}`")),
-        };
-    }
-    let power = opts.power();
-    let best = infos.iter().filter(|i| is_hardware(i)).min_by_key(|i| rank(i, power)).cloned();
-    match best {
-        Some(info) => AutoChoice::Gpu { info: Box::new(info), named: false },
-        None => AutoChoice::Cpu(no_hardware_reason(&infos)),
+    let mut infos = list_adapters(opts);
+    match auto_index(&infos, opts) {
+        Ok((i, named)) => AutoChoice::Gpu { info: Box::new(infos.swap_remove(i)), named },
+        Err(why) => AutoChoice::Cpu(why),
     }
 }
 
@@ -173,7 +183,12 @@ impl GpuContext {
     pub async fn new_async(opts: &GpuOptions) -> Result<Self> {
         let inst = instance(opts);
         let adapter = match opts.name() {
-            Some(name) => named_adapter(&inst, opts, &name).await?,
+            Some(name) => {
+                let all = inst.enumerate_adapters(opts.backends()).await;
+                let infos: Vec<_> = all.iter().map(|a| a.get_info()).collect();
+                let i = index_named(&infos, &name).map_err(|reason| Error::NoAdapter { reason })?;
+                take(all, i)?
+            }
             None => inst
                 .request_adapter(&wgpu::RequestAdapterOptions { power_preference: opts.power(), ..Default::default() })
                 .await
@@ -189,21 +204,10 @@ impl GpuContext {
     pub fn new_auto(opts: &GpuOptions) -> Result<Self> {
         pollster::block_on(async {
             let inst = instance(opts);
-            let adapter = match opts.name() {
-                Some(name) => named_adapter(&inst, opts, &name).await?,
-                None => {
-                    let all = inst.enumerate_adapters(opts.backends()).await;
-                    let infos: Vec<_> = all.iter().map(|a| a.get_info()).collect();
-                    let best = (0..all.len())
-                        .filter(|&i| is_hardware(&infos[i]))
-                        .min_by_key(|&i| rank(&infos[i], opts.power()))
-                        .ok_or_else(|| Error::NoAdapter { reason: no_hardware_reason(&infos) })?;
-                    all.into_iter()
-                        .nth(best)
-                        .ok_or_else(|| Error::NoAdapter { reason: "adapter list changed".into() })?
-                }
-            };
-            Self::open(adapter).await
+            let all = inst.enumerate_adapters(opts.backends()).await;
+            let infos: Vec<_> = all.iter().map(|a| a.get_info()).collect();
+            let (i, _) = auto_index(&infos, opts).map_err(|reason| Error::NoAdapter { reason })?;
+            Self::open(take(all, i)?).await
         })
     }
 

@@ -58,7 +58,7 @@ macro_rules! stages {
                 ts: Option<&Timestamps>,
                 mut special: impl FnMut(&'static str, &mut wgpu::ComputePass<'_>) -> bool,
             ) {
-                let Some(ts) = ts else {
+                if ts.is_none() {
                     // Not profiling: every stage's `prepare` first (each only
                     // clears accumulators that no earlier stage of the frame
                     // touches: counters, hist, flags), then every stage as
@@ -76,8 +76,7 @@ macro_rules! stages {
                         }
                     )*
                     return;
-                };
-                let ts = Some(ts);
+                }
                 let mut stage = 0;
                 $(
                     self.$m.prepare(enc, b);
