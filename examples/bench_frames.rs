@@ -1,8 +1,10 @@
 //! Times the CPU pipeline over a list of image files and prints JSON to stdout.
 //!
 //! ```text
-//! cargo run --release --example bench_frames -- [--repeats R] FILE...
+//! cargo run --release --example bench_frames -- [--repeats R] [--only METHOD] FILE...
 //! ```
+//!
+//! `--only METHOD` runs one method (for profiling it alone with `perf record`).
 //!
 //! For each method the frames are loaded once (decoding is not timed), the
 //! whole list is run once to warm up, then `R` (default 5) more times; each
@@ -23,7 +25,7 @@ use std::hint::black_box;
 use std::time::Instant;
 
 fn usage() -> ! {
-    eprintln!("usage: bench_frames [--repeats R] FILE...");
+    eprintln!("usage: bench_frames [--repeats R] [--only edges|lfast_detect_and_compute|orb_baseline] FILE...");
     std::process::exit(2);
 }
 
@@ -61,11 +63,13 @@ fn main() -> lfast::Result<()> {
     let mut args = std::env::args().skip(1);
     let mut repeats = 5usize;
     let mut files = Vec::new();
+    let mut only: Option<String> = None;
     while let Some(a) = args.next() {
         match a.as_str() {
             "--repeats" | "-r" => {
                 repeats = args.next().and_then(|v| v.parse().ok()).filter(|&r| r > 0).unwrap_or_else(|| usage());
             }
+            "--only" => only = Some(args.next().unwrap_or_else(|| usage())),
             "-h" | "--help" => usage(),
             _ => files.push(a),
         }
@@ -78,14 +82,28 @@ fn main() -> lfast::Result<()> {
     let det = CpuDetector::new(Config::default())?;
     let orb = OrbDetector::new(OrbParams { n_features: 2000, ..OrbParams::default() })?;
 
-    let (edges, n_edges) = time_passes(&frames, repeats, |img| {
-        let e = det.edge_image(img.view()).expect("valid image");
-        e.data.iter().filter(|&&v| v != 0).count()
-    });
-    let (lfast, n_lfast) =
-        time_passes(&frames, repeats, |img| det.detect_and_compute(img.view(), None).expect("valid image").0.len());
-    let (orb_t, n_orb) =
-        time_passes(&frames, repeats, |img| orb.detect_and_compute(img.view()).expect("valid image").0.len());
+    const METHODS: [&str; 3] = ["edges", "lfast_detect_and_compute", "orb_baseline"];
+    if only.as_deref().is_some_and(|m| !METHODS.contains(&m)) {
+        usage();
+    }
+    let run = |m: &str| only.as_deref().is_none_or(|o| o == m);
+    let mut methods = serde_json::Map::new();
+    if run(METHODS[0]) {
+        let (t, n) = time_passes(&frames, repeats, |img| {
+            let e = det.edge_image(img.view()).expect("valid image");
+            e.data.iter().filter(|&&v| v != 0).count()
+        });
+        methods.insert(METHODS[0].into(), summary(&t, n, "mean_edge_pixels"));
+    }
+    if run(METHODS[1]) {
+        let (t, n) =
+            time_passes(&frames, repeats, |img| det.detect_and_compute(img.view(), None).expect("valid image").0.len());
+        methods.insert(METHODS[1].into(), summary(&t, n, "mean_keypoints"));
+    }
+    if run(METHODS[2]) {
+        let (t, n) = time_passes(&frames, repeats, |img| orb.detect_and_compute(img.view()).expect("valid image").0.len());
+        methods.insert(METHODS[2].into(), summary(&t, n, "mean_keypoints"));
+    }
 
     let mut sizes: Vec<[u32; 2]> = frames.iter().map(|f| [f.width, f.height]).collect();
     sizes.sort_unstable();
@@ -95,11 +113,7 @@ fn main() -> lfast::Result<()> {
         "sizes": sizes,
         "repeats": repeats,
         "threads": rayon::current_num_threads(),
-        "methods": {
-            "edges": summary(&edges, n_edges, "mean_edge_pixels"),
-            "lfast_detect_and_compute": summary(&lfast, n_lfast, "mean_keypoints"),
-            "orb_baseline": summary(&orb_t, n_orb, "mean_keypoints"),
-        }
+        "methods": methods,
     });
     println!("{}", serde_json::to_string_pretty(&out).expect("JSON"));
     Ok(())
