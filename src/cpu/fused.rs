@@ -13,7 +13,7 @@
 use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use super::local_threshold::{BandHistograms, Cells};
 use super::simd::dispatch;
-use super::{hysteresis, median, rules};
+use super::{hysteresis, median};
 use crate::image::Plane;
 use rayon::prelude::*;
 
@@ -89,28 +89,22 @@ dispatch! {
     }
 }
 
-/// Per-column integer thresholds of one window row: M >= hi is STRONG, else
-/// >= lo WEAK_STRONG, >= whi WEAK, >= wlo WEAK_WEAK (SPEC 6 as integers).
+/// Per-column integer thresholds of one window row, on S = dx² + dy² so that
+/// no square root is taken per pixel: with M = isqrt(S) >> 1, M >= t exactly when
+/// S >= (2t)². S >= hi is STRONG, else >= lo WEAK_STRONG, >= whi WEAK,
+/// >= wlo WEAK_WEAK (SPEC 6 as integers).
+#[derive(Clone, Debug, Default)]
 struct Thresholds {
-    hi: Vec<u16>,
-    lo: Vec<u16>,
-    whi: Vec<u16>,
-    wlo: Vec<u16>,
+    hi: Vec<u32>,
+    lo: Vec<u32>,
+    whi: Vec<u32>,
+    wlo: Vec<u32>,
 }
 
+/// The least S whose magnitude `isqrt(S) >> 1` reaches `t`.
 #[inline(always)]
-fn class_from(m: u16, hi: u16, lo: u16, whi: u16, wlo: u16) -> u8 {
-    if m >= hi {
-        STRONG
-    } else if m >= lo {
-        WEAK_STRONG
-    } else if m >= whi {
-        WEAK
-    } else if m >= wlo {
-        WEAK_WEAK
-    } else {
-        NONE
-    }
+fn s_of_m(t: u32) -> u32 {
+    (2 * t) * (2 * t)
 }
 
 /// All-ones when `c`, else 0 (for branch-free selects that vectorise).
@@ -120,43 +114,51 @@ fn mask(c: bool) -> u32 {
 }
 
 dispatch! {
-    /// NMS and classification of the interior of one row (x in 1..w-1).
-    fn classify_row(su: &[u32], s: &[u32], sd: &[u32], sec: &[u8], hi: &[u16], lo: &[u16], whi: &[u16], wlo: &[u16], out: &mut [u8]) {
-        let w = s.len();
-        let (su, sd, sec, out) = (&su[..w], &sd[..w], &sec[..w], &mut out[..w]);
+    /// NMS and classification of one row. `su`, `s`, `sd`, `sec` and `out` are
+    /// padded rows of `w + 2` (column x at index x + 1, zeros outside the
+    /// image, so the borders need no special case); the thresholds have `w`.
+    fn classify_row(su: &[u32], s: &[u32], sd: &[u32], sec: &[u8], hi: &[u32], lo: &[u32], whi: &[u32], wlo: &[u32], out: &mut [u8]) {
+        let w = hi.len();
+        // left, centre and right neighbours of column t, all of length w
+        fn lcr(r: &[u32], w: usize) -> (&[u32], &[u32], &[u32]) {
+            (&r[..w], &r[1..w + 1], &r[2..w + 2])
+        }
+        let ((ul, uc, ur), (sl, sc, sr), (dl, dc, dr)) = (lcr(su, w), lcr(s, w), lcr(sd, w));
+        let (sec, out) = (&sec[1..w + 1], &mut out[1..w + 1]);
         let (hi, lo, whi, wlo) = (&hi[..w], &lo[..w], &whi[..w], &wlo[..w]);
-        for x in 1..w - 1 {
-            let v = s[x];
-            let k = sec[x];
+        for t in 0..w {
+            let v = sc[t];
+            let k = sec[t];
             let (k0, k1, k2, k3) = (mask(k == 0), mask(k == 1), mask(k == 2), mask(k == 3));
             // neighbours across the gradient: `a` must be beaten, `b` matched
-            let a = (s[x - 1] & k0) | (su[x] & k1) | (su[x - 1] & k2) | (su[x + 1] & k3);
-            let b = (s[x + 1] & k0) | (sd[x] & k1) | (sd[x + 1] & k2) | (sd[x - 1] & k3);
+            let a = (sl[t] & k0) | (uc[t] & k1) | (ul[t] & k2) | (ur[t] & k3);
+            let b = (sr[t] & k0) | (dc[t] & k1) | (dr[t] & k2) | (dl[t] & k3);
             let keep = ((v > 0) & (v > a) & (v >= b)) as u8;
-            let m = (sqrt_floor(v) >> 1) as u16;
             // hi >= lo and whi >= wlo, so first-match is: >= lo ? 3 + (>= hi) : (>= wlo) + (>= whi)
-            let ge_lo = (m >= lo[x]) as u8;
-            let strongish = 3 + (m >= hi[x]) as u8;
-            let weakish = (m >= wlo[x]) as u8 + (m >= whi[x]) as u8;
-            out[x] = keep * (ge_lo * strongish + (1 - ge_lo) * weakish);
+            let ge_lo = (v >= lo[t]) as u8;
+            let strongish = 3 + (v >= hi[t]) as u8;
+            let weakish = (v >= wlo[t]) as u8 + (v >= whi[t]) as u8;
+            out[t] = keep * (ge_lo * strongish + (1 - ge_lo) * weakish);
         }
     }
 }
 
 dispatch! {
-    /// Rules 1 and 2 on the interior of one row (x in 1..w-1).
+    /// Rules 1 and 2 on one row, from padded class rows of `w + 2` (zeros
+    /// outside the image: NONE is neither WEAK_STRONG nor WEAK_WEAK, so the
+    /// borders need no special case) into `out` (`w`).
     fn rules_row(cu: &[u8], c: &[u8], cd: &[u8], out: &mut [u8]) {
-        let w = c.len();
-        let (cu, cd, out) = (&cu[..w], &cd[..w], &mut out[..w]);
-        for x in 1..w - 1 {
-            let n = [cu[x - 1], cu[x], cu[x + 1], c[x - 1], c[x + 1], cd[x - 1], cd[x], cd[x + 1]];
+        let w = out.len();
+        let (cu, c, cd) = (&cu[..w + 2], &c[..w + 2], &cd[..w + 2]);
+        for x in 0..w {
+            let n = [cu[x], cu[x + 1], cu[x + 2], c[x], c[x + 2], cd[x], cd[x + 1], cd[x + 2]];
             let mut ws = false;
             let mut ww = false;
             for v in n {
                 ws |= v == WEAK_STRONG;
                 ww |= v == WEAK_WEAK;
             }
-            let v = c[x];
+            let v = c[x + 1];
             out[x] = if v == WEAK_STRONG {
                 if ws { STRONG } else { WEAK }
             } else if v == WEAK_WEAK {
@@ -212,9 +214,13 @@ pub struct EdgeScratch {
     pub edges: Plane<u8>,
     s: Vec<u32>,
     sec: Vec<u8>,
-    classes: Plane<u8>,
+    thresholds: Vec<Thresholds>,
     ruled: Plane<u8>,
 }
+
+/// Rows per task of the NMS + classification + rules pass (each task
+/// classifies two rows more than it rules).
+const BAND_ROWS: usize = 32;
 
 /// D and E of `img` (SPEC 1-7), equal to [`edge_map`](super::edge_map)'s.
 pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u32) -> FastEdges {
@@ -233,7 +239,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
         sc.edges = em.edges;
         return;
     }
-    let EdgeScratch { denoised: d, edges, s, sec, classes, ruled } = sc;
+    let EdgeScratch { denoised: d, edges, s, sec, thresholds, ruled } = sc;
 
     // 1. median
     d.reshape(img.width, img.height);
@@ -252,22 +258,25 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
         },
     );
 
-    // 2. gradient, sector, cell histograms of M8, one cell row per task
+    // 2. gradient, sector, cell histograms of M8, one cell row per task; S and
+    //    the sector in padded rows of w + 2 (see `classify_row`)
+    let ws = w + 2;
     let layout = Cells::new(img.width, img.height);
-    s.resize(w * h, 0);
-    sec.resize(w * h, 0);
+    s.resize(ws * h, 0);
+    sec.resize(ws * h, 0);
     let d = &*d;
     let (cx, cy) = (&layout.cx, &layout.cy);
-    let cells: Vec<Vec<[u32; 256]>> = bands(s, w, cy)
+    let cells: Vec<Vec<[u32; 256]>> = bands(s, ws, cy)
         .into_par_iter()
-        .zip(bands(sec, w, cy))
+        .zip(bands(sec, ws, cy))
         .enumerate()
         .map(|(j, (s_band, sec_band))| {
             let mut band = BandHistograms::new(cx.len() - 1);
             let mut m8 = vec![0u8; w];
-            for (k, (s_row, sec_row)) in s_band.chunks_mut(w).zip(sec_band.chunks_mut(w)).enumerate() {
+            for (k, (s_row, sec_row)) in s_band.chunks_mut(ws).zip(sec_band.chunks_mut(ws)).enumerate() {
                 let y = cy[j] + k as u32;
-                gradient_row(d.row(y), d.row((y + 1).min(h as u32 - 1)), s_row, sec_row, &mut m8);
+                gradient_row(d.row(y), d.row((y + 1).min(h as u32 - 1)), &mut s_row[1..=w], &mut sec_row[1..=w], &mut m8);
+                (s_row[0], s_row[w + 1]) = (0, 0);
                 band.add_row(cx, &m8);
             }
             band.finish()
@@ -291,76 +300,71 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
     let grid = layout.grid(&cells);
     let win = &grid.layout;
     let nx = win.xs.len();
-    let thresholds: Vec<Thresholds> = (0..win.ys.len())
-        .map(|j| {
-            let mut t = Thresholds { hi: vec![0; w], lo: vec![0; w], whi: vec![0; w], wlo: vec![0; w] };
-            for x in 0..w {
-                let v3 = grid.stats[j * nx + win.col_window[x] as usize].v3();
-                // 300 M >= (100 ± alpha) V3  <=>  M >= ceil((100 ± alpha) V3 / 300)
-                let tl1 = ((100 + alpha_pct) * v3).div_ceil(300).min(255);
-                let tl2 = ((100 - alpha_pct) * v3).div_ceil(300);
-                t.hi[x] = t1.max(tl1) as u16;
-                t.lo[x] = t1.min(tl1) as u16;
-                t.whi[x] = t2.max(tl2) as u16;
-                t.wlo[x] = t2.min(tl2) as u16;
-            }
-            t
-        })
-        .collect();
+    thresholds.resize_with(win.ys.len(), Default::default);
+    for (j, t) in thresholds.iter_mut().enumerate() {
+        for v in [&mut t.hi, &mut t.lo, &mut t.whi, &mut t.wlo] {
+            v.resize(w, 0);
+        }
+        for x in 0..w {
+            let v3 = grid.stats[j * nx + win.col_window[x] as usize].v3();
+            // 300 M >= (100 ± alpha) V3  <=>  M >= ceil((100 ± alpha) V3 / 300)
+            let tl1 = ((100 + alpha_pct) * v3).div_ceil(300).min(255);
+            let tl2 = ((100 - alpha_pct) * v3).div_ceil(300);
+            t.hi[x] = s_of_m(t1.max(tl1));
+            t.lo[x] = s_of_m(t1.min(tl1));
+            t.whi[x] = s_of_m(t2.max(tl2));
+            t.wlo[x] = s_of_m(t2.min(tl2));
+        }
+    }
 
-    // 4. NMS + classification
-    let zeros = vec![0u32; w];
-    let (s, sec) = (&*s, &*sec);
-    classes.reshape(img.width, img.height);
-    classes.data.par_chunks_mut(w).enumerate().for_each(|(y, out)| {
-        let row = |yy: usize| &s[yy * w..(yy + 1) * w];
+    // 4. NMS + classification + rules, a band of rows per task: a ring of three
+    //    padded class rows (the band's first and last rows classify one row
+    //    beyond it), no class plane; the STRONG pixels are the seeds.
+    let zeros = vec![0u32; ws];
+    let (s, sec, thresholds) = (&*s, &*sec, &*thresholds);
+    let row = |yy: usize| &s[yy * ws..(yy + 1) * ws];
+    let classify = |y: isize, out: &mut [u8]| {
+        if y < 0 || y >= h as isize {
+            out.fill(0);
+            return;
+        }
+        let y = y as usize;
         let su = if y == 0 { &zeros[..] } else { row(y - 1) };
         let sd = if y + 1 == h { &zeros[..] } else { row(y + 1) };
-        let (sm, sc) = (row(y), &sec[y * w..(y + 1) * w]);
         let t = &thresholds[win.row_window[y] as usize];
-        classify_row(su, sm, sd, sc, &t.hi, &t.lo, &t.whi, &t.wlo, out);
-        for x in [0, w - 1] {
-            let get = |xx: isize, r: &[u32]| if xx < 0 || xx >= w as isize { 0 } else { r[xx as usize] };
-            let v = sm[x];
-            let xi = x as isize;
-            let (a, b) = match sc[x] {
-                0 => (get(xi - 1, sm), get(xi + 1, sm)),
-                1 => (su[x], sd[x]),
-                2 => (get(xi - 1, su), get(xi + 1, sd)),
-                _ => (get(xi + 1, su), get(xi - 1, sd)),
-            };
-            let m = (sqrt_floor(v) >> 1) as u16;
-            let c = class_from(m, t.hi[x], t.lo[x], t.whi[x], t.wlo[x]);
-            out[x] = if v > 0 && v > a && v >= b { c } else { NONE };
-        }
-    });
-
-    // 5. rules, STRONG seeds, hysteresis
-    let zeros = vec![0u8; w];
-    let classes = &*classes;
+        classify_row(su, row(y), sd, &sec[y * ws..(y + 1) * ws], &t.hi, &t.lo, &t.whi, &t.wlo, out);
+        (out[0], out[w + 1]) = (0, 0);
+    };
     ruled.reshape(img.width, img.height);
+    let band_rows = BAND_ROWS.min(h);
     let seeds: Vec<usize> = ruled
         .data
-        .par_chunks_mut(w)
+        .par_chunks_mut(band_rows * w)
         .enumerate()
-        .flat_map_iter(|(y, out)| {
-            let row = |yy: usize| &classes.data[yy * w..(yy + 1) * w];
-            let cu = if y == 0 { &zeros[..] } else { row(y - 1) };
-            let cd = if y + 1 == h { &zeros[..] } else { row(y + 1) };
-            rules_row(cu, row(y), cd, out);
-            for x in [0, w - 1] {
-                out[x] = rules::rule_at(classes, x as u32, y as u32);
-            }
+        .flat_map_iter(|(b, out)| {
+            let y0 = b * band_rows;
+            let mut ring = [vec![0u8; ws], vec![0u8; ws], vec![0u8; ws]];
+            classify(y0 as isize - 1, &mut ring[0]);
+            classify(y0 as isize, &mut ring[1]);
             let mut seeds = Vec::new();
-            for_each_nonzero(out, |x| {
-                if out[x] == STRONG {
-                    seeds.push(y * w + x);
-                }
-            });
+            for (k, out) in out.chunks_mut(w).enumerate() {
+                let y = y0 + k;
+                classify(y as isize + 1, &mut ring[2]);
+                rules_row(&ring[0], &ring[1], &ring[2], out);
+                for_each_nonzero(out, |x| {
+                    if out[x] == STRONG {
+                        seeds.push(y * w + x);
+                    }
+                });
+                ring.rotate_left(1);
+            }
             seeds
         })
         .collect();
-    hysteresis::flood(ruled, &seeds, edges);
+
+    // 5. hysteresis in place; E is the ruled plane afterwards
+    hysteresis::flood_in_place(ruled, &seeds);
+    std::mem::swap(ruled, edges);
     debug_assert!(edges.data.iter().all(|&v| v == 0 || v == EDGE));
 }
 
@@ -415,7 +419,7 @@ mod tests {
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
         #[test]
-        fn equals_the_staged_pipeline(w in 1u32..70, h in 1u32..50, seed in proptest::prelude::any::<u64>(),
+        fn equals_the_staged_pipeline(w in 1u32..70, h in 1u32..110, seed in proptest::prelude::any::<u64>(),
                                       levels in 0u64..40, alpha in 0u32..100, num in 1u32..3000) {
             let img = noise_image(w, h, seed, levels);
             let em = edge_map_with(&img, num, 10_000, alpha);
