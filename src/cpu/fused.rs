@@ -305,21 +305,26 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
         for v in [&mut t.hi, &mut t.lo, &mut t.whi, &mut t.wlo] {
             v.resize(w, 0);
         }
-        for x in 0..w {
-            let v3 = grid.stats[j * nx + win.col_window[x] as usize].v3();
+        // one set of thresholds per window, written over the columns that use it
+        let mut x0 = 0;
+        while x0 < w {
+            let i = win.col_window[x0];
+            let x1 = x0 + win.col_window[x0..].iter().take_while(|&&c| c == i).count();
+            let v3 = grid.stats[j * nx + i as usize].v3();
             // 300 M >= (100 ± alpha) V3  <=>  M >= ceil((100 ± alpha) V3 / 300)
             let tl1 = ((100 + alpha_pct) * v3).div_ceil(300).min(255);
             let tl2 = ((100 - alpha_pct) * v3).div_ceil(300);
-            t.hi[x] = s_of_m(t1.max(tl1));
-            t.lo[x] = s_of_m(t1.min(tl1));
-            t.whi[x] = s_of_m(t2.max(tl2));
-            t.wlo[x] = s_of_m(t2.min(tl2));
+            t.hi[x0..x1].fill(s_of_m(t1.max(tl1)));
+            t.lo[x0..x1].fill(s_of_m(t1.min(tl1)));
+            t.whi[x0..x1].fill(s_of_m(t2.max(tl2)));
+            t.wlo[x0..x1].fill(s_of_m(t2.min(tl2)));
+            x0 = x1;
         }
     }
 
     // 4. NMS + classification + rules, a band of rows per task: a ring of three
     //    padded class rows (the band's first and last rows classify one row
-    //    beyond it), no class plane; the STRONG pixels are the seeds.
+    //    beyond it), no class plane; lists the WEAK pixels for the flood.
     let zeros = vec![0u32; ws];
     let (s, sec, thresholds) = (&*s, &*sec, &*thresholds);
     let row = |yy: usize| &s[yy * ws..(yy + 1) * ws];
@@ -337,7 +342,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
     };
     ruled.reshape(img.width, img.height);
     let band_rows = BAND_ROWS.min(h);
-    let seeds: Vec<usize> = ruled
+    let weak: Vec<usize> = ruled
         .data
         .par_chunks_mut(band_rows * w)
         .enumerate()
@@ -346,24 +351,24 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
             let mut ring = [vec![0u8; ws], vec![0u8; ws], vec![0u8; ws]];
             classify(y0 as isize - 1, &mut ring[0]);
             classify(y0 as isize, &mut ring[1]);
-            let mut seeds = Vec::new();
+            let mut weak = Vec::new();
             for (k, out) in out.chunks_mut(w).enumerate() {
                 let y = y0 + k;
                 classify(y as isize + 1, &mut ring[2]);
                 rules_row(&ring[0], &ring[1], &ring[2], out);
                 for_each_nonzero(out, |x| {
-                    if out[x] == STRONG {
-                        seeds.push(y * w + x);
+                    if out[x] == WEAK {
+                        weak.push(y * w + x);
                     }
                 });
                 ring.rotate_left(1);
             }
-            seeds
+            weak
         })
         .collect();
 
     // 5. hysteresis in place; E is the ruled plane afterwards
-    hysteresis::flood_in_place(ruled, &seeds);
+    hysteresis::flood_in_place(ruled, &weak);
     std::mem::swap(ruled, edges);
     debug_assert!(edges.data.iter().all(|&v| v == 0 || v == EDGE));
 }
