@@ -65,6 +65,15 @@ dispatch! {
     }
 }
 
+/// Lanes of the chunked row kernels (32 bytes: one AVX2 register of u8).
+const CHUNK: usize = 32;
+
+/// `r[t0..t0 + CHUNK]` as an array, so that loops over it have a constant trip count and vectorise.
+#[inline(always)]
+fn chunk<T>(r: &[T], t0: usize) -> &[T; CHUNK] {
+    r[t0..t0 + CHUNK].try_into().expect("CHUNK elements")
+}
+
 dispatch! {
     /// One gradient row from D rows y and y+1 (clamped by the caller).
     fn gradient_row(r0: &[u8], r1: &[u8], s: &mut [u32], sec: &mut [u8], m8: &mut [u8]) {
@@ -126,21 +135,47 @@ dispatch! {
         let ((ul, uc, ur), (sl, sc, sr), (dl, dc, dr)) = (lcr(su, w), lcr(s, w), lcr(sd, w));
         let (sec, out) = (&sec[1..w + 1], &mut out[1..w + 1]);
         let (hi, lo, whi, wlo) = (&hi[..w], &lo[..w], &whi[..w], &wlo[..w]);
-        for t in 0..w {
-            let v = sc[t];
-            let k = sec[t];
-            let (k0, k1, k2, k3) = (mask(k == 0), mask(k == 1), mask(k == 2), mask(k == 3));
-            // neighbours across the gradient: `a` must be beaten, `b` matched
-            let a = (sl[t] & k0) | (uc[t] & k1) | (ul[t] & k2) | (ur[t] & k3);
-            let b = (sr[t] & k0) | (dc[t] & k1) | (dr[t] & k2) | (dl[t] & k3);
-            let keep = ((v > 0) & (v > a) & (v >= b)) as u8;
-            // hi >= lo and whi >= wlo, so first-match is: >= lo ? 3 + (>= hi) : (>= wlo) + (>= whi)
-            let ge_lo = (v >= lo[t]) as u8;
-            let strongish = 3 + (v >= hi[t]) as u8;
-            let weakish = (v >= wlo[t]) as u8 + (v >= whi[t]) as u8;
-            out[t] = keep * (ge_lo * strongish + (1 - ge_lo) * weakish);
+        // Most pixels lie below every threshold: such a chunk is all NONE.
+        let mut t0 = 0;
+        while t0 + CHUNK <= w {
+            let (sc_, wlo_) = (chunk(sc, t0), chunk(wlo, t0));
+            let o: &mut [u8; CHUNK] = (&mut out[t0..t0 + CHUNK]).try_into().expect("CHUNK bytes");
+            if sc_.iter().zip(wlo_).fold(false, |a, (v, lim)| a | (v >= lim)) {
+                let [ul, uc, ur, sl, sr, dl, dc, dr] = [ul, uc, ur, sl, sr, dl, dc, dr].map(|r| chunk(r, t0));
+                let [hi, lo, whi] = [hi, lo, whi].map(|r| chunk(r, t0));
+                let sec = chunk(sec, t0);
+                for t in 0..CHUNK {
+                    let n = [ul[t], uc[t], ur[t], sl[t], sc_[t], sr[t], dl[t], dc[t], dr[t]];
+                    o[t] = class_of_s(n, sec[t], [hi[t], lo[t], whi[t], wlo_[t]]);
+                }
+            } else {
+                *o = [NONE; CHUNK];
+            }
+            t0 += CHUNK;
+        }
+        for t in t0..w {
+            let n = [ul[t], uc[t], ur[t], sl[t], sc[t], sr[t], dl[t], dc[t], dr[t]];
+            out[t] = class_of_s(n, sec[t], [hi[t], lo[t], whi[t], wlo[t]]);
         }
     }
+}
+
+/// NMS and classification of one pixel: `n` is S of its 3x3 neighbourhood in
+/// row-major order, `k` its sector code, `t` its thresholds `[hi, lo, whi, wlo]`.
+#[inline(always)]
+fn class_of_s(n: [u32; 9], k: u8, t: [u32; 4]) -> u8 {
+    let [ul, uc, ur, sl, v, sr, dl, dc, dr] = n;
+    let [hi, lo, whi, wlo] = t;
+    let (k0, k1, k2, k3) = (mask(k == 0), mask(k == 1), mask(k == 2), mask(k == 3));
+    // neighbours across the gradient: `a` must be beaten, `b` matched
+    let a = (sl & k0) | (uc & k1) | (ul & k2) | (ur & k3);
+    let b = (sr & k0) | (dc & k1) | (dr & k2) | (dl & k3);
+    let keep = ((v > 0) & (v > a) & (v >= b)) as u8;
+    // hi >= lo and whi >= wlo, so first-match is: >= lo ? 3 + (>= hi) : (>= wlo) + (>= whi)
+    let ge_lo = (v >= lo) as u8;
+    let strongish = 3 + (v >= hi) as u8;
+    let weakish = (v >= wlo) as u8 + (v >= whi) as u8;
+    keep * (ge_lo * strongish + (1 - ge_lo) * weakish)
 }
 
 dispatch! {
