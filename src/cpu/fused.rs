@@ -306,7 +306,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
         .zip(bands(sec, ws, cy))
         .enumerate()
         .map(|(j, (s_band, sec_band))| {
-            let mut band = BandHistograms::new(cx.len() - 1);
+            let mut band = BandHistograms::new(cx);
             let mut m8 = vec![0u8; w];
             for (k, (s_row, sec_row)) in s_band.chunks_mut(ws).zip(sec_band.chunks_mut(ws)).enumerate() {
                 let y = cy[j] + k as u32;

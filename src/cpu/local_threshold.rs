@@ -124,19 +124,34 @@ pub(crate) fn add_row(band: &mut [[u32; 256]], cx: &[u32], m8: impl Fn(usize) ->
 }
 
 /// Cell histograms of one band kept as four interleaved sub-histograms, so
-/// that runs of equal values do not serialise on one counter; merged once.
+/// that runs of equal values do not serialise on one counter. The
+/// sub-histograms count in u16 (half the memory to clear and merge per cell)
+/// and are flushed into the cell's u32 histogram before any counter could wrap.
 pub(crate) struct BandHistograms {
-    quads: Vec<[[u32; 256]; 4]>,
+    quads: Vec<[[u16; 256]; 4]>,
+    cells: Vec<[u32; 256]>,
+    /// Rows added since the last flush, and the most that fit in u16.
+    rows: u32,
+    max_rows: u32,
 }
 
 impl BandHistograms {
-    pub fn new(cells: usize) -> Self {
-        Self { quads: vec![[[0; 256]; 4]; cells] }
+    /// Histograms for the cells cut at `cx` (`cx.len() - 1` cells).
+    pub fn new(cx: &[u32]) -> Self {
+        let n = cx.len() - 1;
+        // per row, sub-histogram 0 takes at most widest / 4 + 3 values of one bin
+        let widest = cx.windows(2).map(|c| c[1] - c[0]).max().unwrap_or(0);
+        let max_rows = (u16::MAX as u32 / (widest / 4 + 3)).max(1);
+        Self { quads: vec![[[0; 256]; 4]; n], cells: vec![[0; 256]; n], rows: 0, max_rows }
     }
 
     /// Adds one row of M8 values to the cells it crosses.
     #[inline]
     pub fn add_row(&mut self, cx: &[u32], m8: &[u8]) {
+        if self.rows == self.max_rows {
+            self.flush(true);
+        }
+        self.rows += 1;
         for (i, q) in self.quads.iter_mut().enumerate() {
             let cell = &m8[cx[i] as usize..cx[i + 1] as usize];
             let mut chunks = cell.chunks_exact(4);
@@ -152,9 +167,23 @@ impl BandHistograms {
         }
     }
 
+    /// Adds the sub-histograms into the cells' (and clears them when `clear`).
+    fn flush(&mut self, clear: bool) {
+        for (q, cell) in self.quads.iter_mut().zip(&mut self.cells) {
+            for (b, c) in cell.iter_mut().enumerate() {
+                *c += q[0][b] as u32 + q[1][b] as u32 + q[2][b] as u32 + q[3][b] as u32;
+            }
+            if clear {
+                *q = [[0; 256]; 4];
+            }
+        }
+        self.rows = 0;
+    }
+
     /// The merged histogram of each cell.
-    pub fn finish(self) -> Vec<[u32; 256]> {
-        self.quads.iter().map(|q| std::array::from_fn(|b| q[0][b] + q[1][b] + q[2][b] + q[3][b])).collect()
+    pub fn finish(mut self) -> Vec<[u32; 256]> {
+        self.flush(false);
+        self.cells
     }
 }
 
@@ -180,6 +209,22 @@ pub fn local_threshold(m: &Plane<u16>) -> WindowGrid {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn band_histograms_flush_before_u16_wraps() {
+        // 2 cells (widths 8 and 3), 70 000 rows of one value: 560 000 counts in
+        // one bin, far past u16, so the sub-histograms must have been flushed.
+        let cx = [0u32, 8, 11];
+        let mut band = super::BandHistograms::new(&cx);
+        let row = [7u8, 7, 7, 7, 7, 7, 7, 7, 200, 201, 200];
+        for _ in 0..70_000 {
+            band.add_row(&cx, &row);
+        }
+        let cells = band.finish();
+        assert_eq!(cells[0][7], 560_000);
+        assert_eq!(cells[0].iter().sum::<u32>(), 560_000);
+        assert_eq!((cells[1][200], cells[1][201], cells[1].iter().sum::<u32>()), (140_000, 70_000, 210_000));
+    }
+
     use super::*;
 
     #[test]
