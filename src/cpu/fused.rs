@@ -251,6 +251,8 @@ pub struct EdgeScratch {
     sec: Vec<u8>,
     thresholds: Vec<Thresholds>,
     ruled: Plane<u8>,
+    /// The window and cell layout of the last image size (levels keep their sizes from frame to frame).
+    cells: Option<Cells>,
 }
 
 /// Rows per task of the NMS + classification + rules pass (each task
@@ -274,7 +276,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
         sc.edges = em.edges;
         return;
     }
-    let EdgeScratch { denoised: d, edges, s, sec, thresholds, ruled } = sc;
+    let EdgeScratch { denoised: d, edges, s, sec, thresholds, ruled, cells: layout } = sc;
 
     // 1. median
     d.reshape(img.width, img.height);
@@ -296,7 +298,10 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
     // 2. gradient, sector, cell histograms of M8, one cell row per task; S and
     //    the sector in padded rows of w + 2 (see `classify_row`)
     let ws = w + 2;
-    let layout = Cells::new(img.width, img.height);
+    if layout.as_ref().is_none_or(|c| (c.cx.last(), c.cy.last()) != (Some(&img.width), Some(&img.height))) {
+        *layout = Some(Cells::new(img.width, img.height));
+    }
+    let layout = layout.as_ref().expect("set just above");
     s.resize(ws * h, 0);
     sec.resize(ws * h, 0);
     let d = &*d;
@@ -332,8 +337,8 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
     };
     let t1 = k as u32 + 1;
     let t2 = t1.div_ceil(2); // 2M >= T1  <=>  M >= ceil(T1 / 2)
-    let grid = layout.grid(&cells);
-    let win = &grid.layout;
+    let stats = layout.stats(&cells);
+    let win = &layout.windows;
     let nx = win.xs.len();
     thresholds.resize_with(win.ys.len(), Default::default);
     for (j, t) in thresholds.iter_mut().enumerate() {
@@ -345,7 +350,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
         while x0 < w {
             let i = win.col_window[x0];
             let x1 = x0 + win.col_window[x0..].iter().take_while(|&&c| c == i).count();
-            let v3 = grid.stats[j * nx + i as usize].v3();
+            let v3 = stats[j * nx + i as usize].v3();
             // 300 M >= (100 ± alpha) V3  <=>  M >= ceil((100 ± alpha) V3 / 300)
             let tl1 = ((100 + alpha_pct) * v3).div_ceil(300).min(255);
             let tl2 = ((100 - alpha_pct) * v3).div_ceil(300);

@@ -91,6 +91,12 @@ impl Cells {
     /// Sums the cells' histograms (`cells[j][i]`: cell row j, cell column i)
     /// into each window's statistics and builds the grid.
     pub fn grid(self, cells: &[Vec<[u32; 256]>]) -> WindowGrid {
+        let stats = self.stats(cells);
+        WindowGrid { layout: self.windows, stats }
+    }
+
+    /// Each window's statistics (row-major, as [`WindowGrid::stats`]) from the cells' histograms.
+    pub fn stats(&self, cells: &[Vec<[u32; 256]>]) -> Vec<WindowStats> {
         let cell_of = |cuts: &[u32], v: u32| cuts.binary_search(&v).expect("window edges are cut points");
         let l = &self.windows;
         let mut stats = Vec::with_capacity(l.len());
@@ -109,7 +115,7 @@ impl Cells {
                 stats.push(stats_of(&hist));
             }
         }
-        WindowGrid { layout: self.windows, stats }
+        stats
     }
 }
 
