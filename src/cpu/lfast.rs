@@ -176,13 +176,22 @@ pub fn lfast(e: &Plane<u8>, mask: Option<&Plane<u8>>, p: &LfastParams) -> Vec<[u
         return Vec::new();
     }
     let (x0, x1) = (b as usize, (e.width - b) as usize);
+    // Step 4 for every pixel at once, where rows are wide enough for the
+    // scanner, into this thread's buffer (taken, so a call nested by rayon's
+    // work stealing finds none and allocates its own)
+    thread_local!(static SUPPORT_MAP: std::cell::Cell<Vec<u8>> = const { std::cell::Cell::new(Vec::new()) });
+    let mut smap = SUPPORT_MAP.take();
+    let wide = x1 - x0 >= 32;
+    if wide {
+        scan::support_map_into(e, p.support, &mut smap);
+    }
     // one Vec per rayon task, appended in order: raster order
-    (b..e.height - b)
+    let corners = (b..e.height - b)
         .into_par_iter()
         .fold(Vec::new, |mut out, y| {
             let mrow = mask.map(|m| m.row(y));
-            match scan::Window::new(e, y as usize) {
-                Some(win) if x1 - x0 >= 32 => scan::scan_row(&win, y, x0, x1, mrow, p, &mut out),
+            match scan::Window::new(e, &smap, y as usize) {
+                Some(win) if wide => scan::scan_row(&win, y, x0, x1, mrow, p, &mut out),
                 _ => scan_row_reference(e, y, x0, x1, mrow, p, &mut out),
             }
             out
@@ -190,7 +199,9 @@ pub fn lfast(e: &Plane<u8>, mask: Option<&Plane<u8>>, p: &LfastParams) -> Vec<[u
         .reduce(Vec::new, |mut a, mut b| {
             a.append(&mut b);
             a
-        })
+        });
+    SUPPORT_MAP.set(smap);
+    corners
 }
 
 /// The plain row scan: [`is_corner`] at each edge pixel. For rows narrower than a chunk.

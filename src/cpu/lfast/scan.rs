@@ -2,7 +2,8 @@
 //! [`is_corner`](super::is_corner), with fewer instructions. Per chunk of 32
 //! pixels of a row it builds all 32 circle masks at once (16 compares of 32
 //! bytes, which LLVM vectorises), then decides each edge pixel of the chunk
-//! from its mask, reading Step 4's 3x3 neighbourhoods as three 4-byte words.
+//! from its mask. Step 4 is one byte read from a support map, computed for
+//! every pixel beforehand in one vectorised pass ([`support_map_into`]).
 //! Reads go through [`Window`], which checks once per row what every read relies on.
 
 use super::{CIRCLE, LfastParams};
@@ -14,23 +15,38 @@ use crate::image::Plane;
 /// Pixels per chunk of the vectorised circle masks.
 const CHUNK: usize = 32;
 
-/// The rows `y-7..=y+7` of an edge map, for reads without bounds checks.
+/// The rows `y-7..=y+7` of an edge map and of its support map, for reads
+/// without bounds checks.
 ///
 /// Invariant (checked in [`Window::new`]): `w >= 15`, `7 <= y` and rows
-/// `y-7..=y+7` lie in `d`, i.e. `(y + 8) * w <= d.len()`.
+/// `y-7..=y+7` lie in `d` and in `s`, i.e. `(y + 8) * w <= d.len(), s.len()`.
 pub(super) struct Window<'a> {
     d: &'a [u8],
+    s: &'a [u8],
     w: usize,
     /// Index of `(0, y)`.
     c: usize,
 }
 
 impl<'a> Window<'a> {
-    /// The window around row `y`; `None` where rows `y-7..=y+7` are not all in `e`.
-    pub(super) fn new(e: &'a Plane<u8>, y: usize) -> Option<Self> {
+    /// The window around row `y` of `e` and of its support map `s` (as made by
+    /// [`support_map_into`]); `None` where rows `y-7..=y+7` are not all in both.
+    pub(super) fn new(e: &'a Plane<u8>, s: &'a [u8], y: usize) -> Option<Self> {
         let w = e.width as usize;
-        let fits = w >= 15 && y >= 7 && (y + 8).checked_mul(w).is_some_and(|end| end <= e.data.len());
-        fits.then_some(Self { d: &e.data, w, c: y * w })
+        let fits = w >= 15 && y >= 7 && (y + 8).checked_mul(w).is_some_and(|end| end <= e.data.len() && end <= s.len());
+        fits.then_some(Self { d: &e.data, s, w, c: y * w })
+    }
+
+    /// Whether the support map is set at column `cx` of row `y + dy`.
+    ///
+    /// # Safety
+    /// `-7 <= dy <= 7` and `cx < w`.
+    #[inline(always)]
+    unsafe fn supports(&self, cx: usize, dy: isize) -> bool {
+        debug_assert!((-7..=7).contains(&dy) && cx < self.w);
+        let row = (self.c as isize + dy * self.w as isize) as usize;
+        // SAFETY: as in `bytes`, with N = 1 and s for d.
+        unsafe { *self.s.get_unchecked(row + cx) != 0 }
     }
 
     /// The `N` bytes at columns `cx..cx+N` of row `y + dy`.
@@ -48,58 +64,66 @@ impl<'a> Window<'a> {
     }
 }
 
-/// Per circle index t, Step 4's 3x3 around `q = p + 2 CIRCLE[t]` as three
-/// 4-byte words at rows `2dy-1, 2dy, 2dy+1`: the column offset from p of the
-/// words' first byte, and the byte (0..4) of q in them. Words start at
-/// `qx - 1`, or at `qx - 2` right of p, so that none reaches past `px + 8`.
-const Q_WORDS: [(isize, isize, u32); 16] = {
-    let mut t = [(0, 0, 0); 16];
-    let mut i = 0;
-    while i < 16 {
-        let (dx, dy) = CIRCLE[i];
-        let (dx, dy) = (dx as isize, dy as isize);
-        t[i] = if dx > 0 { (2 * dx - 2, 2 * dy, 2) } else { (2 * dx - 1, 2 * dy, 1) };
-        i += 1;
+dispatch! {
+    /// One row of [`support_map_into`]: `out[c] = 1` where `mid[c]` is an edge or
+    /// at least `support` of the 3x3 around it are (then its 8 neighbours
+    /// are: it is not one), for `c` in `1..w-1`; `top`, `bot` the rows above
+    /// and below, all of width `w = out.len()`.
+    fn support_row(top: &[u8], mid: &[u8], bot: &[u8], support: u32, out: &mut [u8]) {
+        let w = out.len();
+        if w < 3 {
+            return;
+        }
+        let n = w - 2;
+        // the three columns c-1, c, c+1 of each row, as equal-length slices
+        let (t, m, b) = (cols3(top, n), cols3(mid, n), cols3(bot, n));
+        // at most 9 edges: a threshold above 9 is never met, as with the u32
+        let thr = support.min(10) as u8;
+        for (i, o) in out[1..n + 1].iter_mut().enumerate() {
+            let mut count = 0u8;
+            for r in [&t, &m, &b] {
+                for col in r {
+                    count += (col[i] == EDGE) as u8;
+                }
+            }
+            *o = (m[1][i] == EDGE || count >= thr) as u8;
+        }
     }
-    t
-};
-
-/// 0x01 in each byte of `v` that equals [`EDGE`] (0xff), 0x00 elsewhere.
-#[inline(always)]
-fn edge_bytes(v: u32) -> u32 {
-    const _: () = assert!(EDGE == 0xff);
-    let x = !v; // zero bytes where v is EDGE
-    let nonzero = ((x & 0x7f7f_7f7f) + 0x7f7f_7f7f) | x; // high bit set where x's byte != 0
-    (!nonzero >> 7) & 0x0101_0101
 }
 
-/// [`super::supports`] for p = (x, y), from three word loads.
+/// Columns `c-1`, `c`, `c+1` of `row` for `c` in `1..=n`, as three slices of length `n`.
+#[inline(always)]
+fn cols3(row: &[u8], n: usize) -> [&[u8]; 3] {
+    [&row[0..n], &row[1..n + 1], &row[2..n + 2]]
+}
+
+/// Step 4 for every pixel q of `e` (see [`super::supports`]), in `s` (resized
+/// to `e`'s size): 1 where q is an edge or at least `support` of its 8
+/// neighbours are, else 0. Only the first and last row and column are left
+/// as they were (corner tests never read them: q lies at most 6 pixels from
+/// p, p at least 7 from every side), so `s` can be reused without clearing.
+pub(super) fn support_map_into(e: &Plane<u8>, support: u32, s: &mut Vec<u8>) {
+    use rayon::prelude::*;
+    let (w, h) = (e.width as usize, e.height as usize);
+    s.resize(w * h, 0);
+    if w >= 3 && h >= 3 {
+        s[w..(h - 1) * w].par_chunks_mut(w).enumerate().for_each(|(k, out)| {
+            let rows = &e.data[k * w..(k + 3) * w];
+            support_row(&rows[..w], &rows[w..2 * w], &rows[2 * w..], support, out);
+        });
+    }
+}
+
+/// [`super::supports`] for p = (x, y), from the support map.
 ///
 /// # Safety
 /// `7 <= x < w - 7` (`w` the window's width).
 #[inline(always)]
-unsafe fn supports_at(win: &Window<'_>, x: usize, t: usize, support: u32) -> bool {
-    let (ox, qy, qbyte) = Q_WORDS[t & 15];
-    let cx = (x as isize + ox) as usize;
-    // SAFETY: |CIRCLE| entries are <= 3 (tested), so qy = 2dy is in -6..=6 and
-    // qy +- 1 in -7..=7. ox is 2dx - 1 >= -7 for dx <= 0, so cx >= x - 7 >= 0,
-    // and cx + 4 = x + 2dx + 3 <= x + 3 < w; ox is 2dx - 2 in 0..=4 for dx > 0,
-    // so cx + 4 <= x + 8 <= w as x < w - 7.
-    let (a, b, c) = unsafe {
-        (
-            u32::from_le_bytes(*win.bytes::<4>(cx, qy - 1)),
-            u32::from_le_bytes(*win.bytes::<4>(cx, qy)),
-            u32::from_le_bytes(*win.bytes::<4>(cx, qy + 1)),
-        )
-    };
-    let mid = edge_bytes(b);
-    if mid >> (8 * qbyte) & 1 == 1 {
-        return true; // q itself is an edge
-    }
-    // q is not an edge: the 3x3 count is the count of its 8 neighbours
-    let keep = 0x00ff_ffffu32 << (8 * (qbyte - 1));
-    let n = ((edge_bytes(a) + mid + edge_bytes(c)) & keep).wrapping_mul(0x0101_0101) >> 24;
-    n >= support
+unsafe fn supports_at(win: &Window<'_>, x: usize, t: usize) -> bool {
+    let (dx, dy) = CIRCLE[t & 15];
+    // SAFETY: |dx|, |dy| <= 3 (tested), so 2dy is in -6..=6 and the column
+    // x + 2dx in x-6..=x+6, which is >= 1 and < w - 1.
+    unsafe { win.supports((x as isize + 2 * dx as isize) as usize, 2 * dy as isize) }
 }
 
 /// The middle index of the branch starting at `s` of `mask` (as [`super::is_corner`]).
@@ -259,7 +283,7 @@ dispatch! {
                     bits &= bits - 1;
                     let x = xs + j;
                     // SAFETY: 7 <= x0 <= x < x1 <= w - 7
-                    if decide(masks[j] as u32, p, |t| unsafe { supports_at(win, x, t, p.support) }) {
+                    if decide(masks[j] as u32, p, |t| unsafe { supports_at(win, x, t) }) {
                         out.push([x as u32, y]);
                     }
                 }
@@ -307,21 +331,14 @@ mod tests {
     }
 
     #[test]
-    fn edge_bytes_exact() {
-        for b in 0..=255u8 {
-            let bytes = [b, 0xff, b ^ 0x80, 255 - b];
-            let want = bytes.map(|v| (v == EDGE) as u8);
-            assert_eq!(edge_bytes(u32::from_le_bytes(bytes)), u32::from_le_bytes(want), "{b}");
-        }
-    }
-
-    #[test]
     fn window_refuses_missing_rows() {
         let e = Plane::<u8>::new(20, 20);
-        assert!(Window::new(&e, 6).is_none());
-        assert!(Window::new(&e, 7).is_some() && Window::new(&e, 12).is_some());
-        assert!(Window::new(&e, 13).is_none());
-        assert!(Window::new(&Plane::<u8>::new(14, 20), 10).is_none());
+        let s = vec![0u8; 400];
+        assert!(Window::new(&e, &s, 6).is_none());
+        assert!(Window::new(&e, &s, 7).is_some() && Window::new(&e, &s, 12).is_some());
+        assert!(Window::new(&e, &s, 13).is_none());
+        assert!(Window::new(&e, &s[..399], 12).is_none());
+        assert!(Window::new(&Plane::<u8>::new(14, 20), &s, 10).is_none());
     }
 
     /// The reference scan: [`is_corner`] at every edge pixel of the border.
@@ -379,8 +396,10 @@ mod tests {
         fn masks_and_supports_match_reference(w in 46u32..100, h in 15u32..30, density in 0u64..256,
                                               seed in proptest::prelude::any::<u64>(), support in 1u32..=8) {
             let e = edge_map(w, h, density, seed);
+            let mut smap = Vec::new();
+            support_map_into(&e, support, &mut smap);
             for y in 7..h as usize - 7 {
-                let win = Window::new(&e, y).expect("rows inside");
+                let win = Window::new(&e, &smap, y).expect("rows inside");
                 let mut xs = 7;
                 while xs + CHUNK <= w as usize - 7 {
                     // SAFETY: 7 <= xs, xs + 32 <= w - 7
@@ -390,7 +409,7 @@ mod tests {
                         proptest::prop_assert_eq!(m as u32, circle_mask(&e, x, yi));
                         for t in 0..16 {
                             // SAFETY: 7 <= x < w - 7
-                            let got = unsafe { supports_at(&win, xs + j, t, support) };
+                            let got = unsafe { supports_at(&win, xs + j, t) };
                             proptest::prop_assert_eq!(got, supports(&e, x, yi, t, support), "({}, {}) t {}", x, y, t);
                         }
                     }
