@@ -45,7 +45,8 @@ impl<'a> Window<'a> {
     unsafe fn supports(&self, cx: usize, dy: isize) -> bool {
         debug_assert!((-7..=7).contains(&dy) && cx < self.w);
         let row = (self.c as isize + dy * self.w as isize) as usize;
-        // SAFETY: as in `bytes`, with N = 1 and s for d.
+        // SAFETY: y >= 7 and |dy| <= 7 give row >= 0; row + cx < row + w <=
+        // (y + 8) * w <= s.len() (the invariant), as cx < w.
         unsafe { *self.s.get_unchecked(row + cx) != 0 }
     }
 
@@ -65,10 +66,10 @@ impl<'a> Window<'a> {
 }
 
 dispatch! {
-    /// One row of [`support_map_into`]: `out[c] = 1` where `mid[c]` is an edge or
-    /// at least `support` of the 3x3 around it are (then its 8 neighbours
-    /// are: it is not one), for `c` in `1..w-1`; `top`, `bot` the rows above
-    /// and below, all of width `w = out.len()`.
+    /// One row of [`support_map_into`]: `out[c] = 1` where `mid[c]` is an
+    /// edge, or at least `support` pixels of the 3x3 around it are (which, as
+    /// `mid[c]` is then not one, are its 8 neighbours), for `c` in `1..w-1`;
+    /// `top`, `bot` are the rows above and below, all of width `w = out.len()`.
     fn support_row(top: &[u8], mid: &[u8], bot: &[u8], support: u32, out: &mut [u8]) {
         let w = out.len();
         if w < 3 {
