@@ -16,21 +16,49 @@ pub fn beats(rq: f32, q: [u32; 2], rp: f32, p: [u32; 2]) -> bool {
 /// assert_eq!(keep, vec![1, 2]);
 /// ```
 pub fn corner_nms(_width: u32, _height: u32, cands: &[[u32; 2]], resp: &[f32], r: u32) -> Vec<usize> {
-    // Visit candidates in raster order; those within r rows of p form one
-    // contiguous run of that order, found by binary search.
-    let mut by_pos: Vec<usize> = (0..cands.len()).collect();
+    // Visit candidates in raster order, a row at a time. The rows within r of
+    // the current row form a window that only moves down; in each of them a
+    // cursor skips the candidates left of x - r, and only moves right as x
+    // grows along the row. So each candidate reads just its (2r+1)^2 square.
+    let n = cands.len();
+    let mut by_pos: Vec<usize> = (0..n).collect();
     by_pos.sort_unstable_by_key(|&i| (cands[i][1], cands[i][0]));
-    let ys: Vec<u32> = by_pos.iter().map(|&i| cands[i][1]).collect();
-    let mut keep: Vec<usize> = (0..cands.len())
-        .filter(|&i| {
-            let [px, py] = cands[i];
-            let lo = ys.partition_point(|&y| y + r < py);
-            let hi = ys.partition_point(|&y| y <= py + r);
-            !by_pos[lo..hi]
-                .iter()
-                .any(|&j| j != i && cands[j][0].abs_diff(px) <= r && beats(resp[j], cands[j], resp[i], cands[i]))
-        })
-        .collect();
+    let xs: Vec<u32> = by_pos.iter().map(|&i| cands[i][0]).collect();
+    // starts[k]..starts[k + 1]: the k-th row of by_pos
+    let mut starts: Vec<usize> = (0..n).filter(|&k| k == 0 || cands[by_pos[k - 1]][1] != cands[by_pos[k]][1]).collect();
+    starts.push(n);
+    let rows = starts.len() - 1;
+    let row_y = |k: usize| cands[by_pos[starts[k]]][1];
+    let (mut r0, mut r1) = (0, 0);
+    let mut cursors = Vec::new();
+    let mut keep = Vec::new();
+    for k in 0..rows {
+        let py = row_y(k);
+        while row_y(r0) + r < py {
+            r0 += 1;
+        }
+        while r1 < rows && row_y(r1) <= py + r {
+            r1 += 1;
+        }
+        cursors.clear();
+        cursors.extend_from_slice(&starts[r0..r1]);
+        for (m, &i) in by_pos.iter().enumerate().take(starts[k + 1]).skip(starts[k]) {
+            let px = xs[m];
+            let (lo, hi) = (px.saturating_sub(r), px.saturating_add(r));
+            let beaten = cursors.iter_mut().zip(&starts[r0 + 1..=r1]).any(|(c, &end)| {
+                while *c < end && xs[*c] < lo {
+                    *c += 1;
+                }
+                (*c..end).take_while(|&q| xs[q] <= hi).any(|q| {
+                    let j = by_pos[q];
+                    j != i && beats(resp[j], cands[j], resp[i], cands[i])
+                })
+            });
+            if !beaten {
+                keep.push(i);
+            }
+        }
+    }
     keep.sort_unstable();
     keep
 }
@@ -57,7 +85,8 @@ mod tests {
 
     proptest::proptest! {
         #[test]
-        fn matches_naive(pts in proptest::collection::btree_set((0u32..24, 0u32..24), 0..60), r in 0u32..4, seed in 0u64..1000) {
+        fn matches_naive(pts in proptest::collection::vec((0u32..24, 0u32..24), 0..80), r in 0u32..5, seed in 0u64..1000) {
+            // any order, duplicate positions allowed
             let cands: Vec<[u32; 2]> = pts.iter().map(|&(x, y)| [x, y]).collect();
             // few distinct responses to force ties
             let resp: Vec<f32> = (0..cands.len()).map(|i| ((i as u64 * 7 + seed) % 5) as f32).collect();

@@ -6,6 +6,8 @@ use crate::config::Mode;
 use crate::image::Plane;
 use rayon::prelude::*;
 
+mod scan;
+
 /// The radius-3 Bresenham circle in FAST order (index 0 straight up, clockwise).
 pub const CIRCLE: [(i32, i32); 16] = [
     (0, -3),
@@ -173,29 +175,51 @@ pub fn lfast(e: &Plane<u8>, mask: Option<&Plane<u8>>, p: &LfastParams) -> Vec<[u
     if e.width <= 2 * b || e.height <= 2 * b {
         return Vec::new();
     }
-    let rows: Vec<Vec<[u32; 2]>> = (b..e.height - b)
+    let (x0, x1) = (b as usize, (e.width - b) as usize);
+    // Step 4 for every pixel at once, where rows are wide enough for the
+    // scanner, into this thread's buffer (taken, so a call nested by rayon's
+    // work stealing finds none and allocates its own)
+    thread_local!(static SUPPORT_MAP: std::cell::Cell<Vec<u8>> = const { std::cell::Cell::new(Vec::new()) });
+    let mut smap = SUPPORT_MAP.take();
+    let wide = x1 - x0 >= 32;
+    if wide {
+        scan::support_map_into(e, p.support, &mut smap);
+    }
+    // one Vec per rayon task, appended in order: raster order
+    let corners = (b..e.height - b)
         .into_par_iter()
-        .map(|y| {
-            let row = e.row(y);
+        .fold(Vec::new, |mut out, y| {
             let mrow = mask.map(|m| m.row(y));
-            let mut out = Vec::new();
-            let (x0, x1) = (b as usize, (e.width - b) as usize);
-            let mut x = x0;
-            while x < x1 {
-                // edges are sparse: skip eight background pixels at a time
-                if x + 8 <= x1 && u64::from_ne_bytes(row[x..x + 8].try_into().expect("8 bytes")) == 0 {
-                    x += 8;
-                    continue;
-                }
-                if row[x] == EDGE && mrow.is_none_or(|m| m[x] != 0) && is_corner(e, x as i32, y as i32, p) {
-                    out.push([x as u32, y]);
-                }
-                x += 1;
+            match scan::Window::new(e, &smap, y as usize) {
+                Some(win) if wide => scan::scan_row(&win, y, x0, x1, mrow, p, &mut out),
+                _ => scan_row_reference(e, y, x0, x1, mrow, p, &mut out),
             }
             out
         })
-        .collect();
-    rows.concat()
+        .reduce(Vec::new, |mut a, mut b| {
+            a.append(&mut b);
+            a
+        });
+    SUPPORT_MAP.set(smap);
+    corners
+}
+
+/// The plain row scan: [`is_corner`] at each edge pixel. For rows narrower than a chunk.
+fn scan_row_reference(
+    e: &Plane<u8>,
+    y: u32,
+    x0: usize,
+    x1: usize,
+    mrow: Option<&[u8]>,
+    p: &LfastParams,
+    out: &mut Vec<[u32; 2]>,
+) {
+    let row = e.row(y);
+    for x in x0..x1 {
+        if row[x] == EDGE && mrow.is_none_or(|m| m[x] != 0) && is_corner(e, x as i32, y as i32, p) {
+            out.push([x as u32, y]);
+        }
+    }
 }
 
 #[cfg(test)]

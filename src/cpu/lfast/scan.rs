@@ -1,0 +1,434 @@
+//! The row scanner behind [`lfast`](super::lfast): the same decisions as
+//! [`is_corner`](super::is_corner), with fewer instructions. Per chunk of 32
+//! pixels of a row it builds all 32 circle masks at once (16 compares of 32
+//! bytes, which LLVM vectorises), then decides each edge pixel of the chunk
+//! from its mask. Step 4 is one byte read from a support map, computed for
+//! every pixel beforehand in one vectorised pass ([`support_map_into`]).
+//! Reads go through [`Window`], which checks once per row what every read relies on.
+
+use super::{CIRCLE, LfastParams};
+use crate::config::Mode;
+use crate::cpu::classify::EDGE;
+use crate::cpu::simd::dispatch;
+use crate::image::Plane;
+
+/// Pixels per chunk of the vectorised circle masks.
+const CHUNK: usize = 32;
+
+/// The rows `y-7..=y+7` of an edge map and of its support map, for reads
+/// without bounds checks.
+///
+/// Invariant (checked in [`Window::new`]): `w >= 15`, `7 <= y` and rows
+/// `y-7..=y+7` lie in `d` and in `s`, i.e. `(y + 8) * w <= d.len(), s.len()`.
+pub(super) struct Window<'a> {
+    d: &'a [u8],
+    s: &'a [u8],
+    w: usize,
+    /// Index of `(0, y)`.
+    c: usize,
+}
+
+impl<'a> Window<'a> {
+    /// The window around row `y` of `e` and of its support map `s` (as made by
+    /// [`support_map_into`]); `None` where rows `y-7..=y+7` are not all in both.
+    pub(super) fn new(e: &'a Plane<u8>, s: &'a [u8], y: usize) -> Option<Self> {
+        let w = e.width as usize;
+        let fits = w >= 15 && y >= 7 && (y + 8).checked_mul(w).is_some_and(|end| end <= e.data.len() && end <= s.len());
+        fits.then_some(Self { d: &e.data, s, w, c: y * w })
+    }
+
+    /// Whether the support map is set at column `cx` of row `y + dy`.
+    ///
+    /// # Safety
+    /// `-7 <= dy <= 7` and `cx < w`.
+    #[inline(always)]
+    unsafe fn supports(&self, cx: usize, dy: isize) -> bool {
+        debug_assert!((-7..=7).contains(&dy) && cx < self.w);
+        let row = (self.c as isize + dy * self.w as isize) as usize;
+        // SAFETY: y >= 7 and |dy| <= 7 give row >= 0; row + cx < row + w <=
+        // (y + 8) * w <= s.len() (the invariant), as cx < w.
+        unsafe { *self.s.get_unchecked(row + cx) != 0 }
+    }
+
+    /// The `N` bytes at columns `cx..cx+N` of row `y + dy`.
+    ///
+    /// # Safety
+    /// `-7 <= dy <= 7` and `cx + N <= w`.
+    #[inline(always)]
+    unsafe fn bytes<const N: usize>(&self, cx: usize, dy: isize) -> &'a [u8; N] {
+        debug_assert!((-7..=7).contains(&dy) && cx + N <= self.w);
+        let row = (self.c as isize + dy * self.w as isize) as usize;
+        // SAFETY: y >= 7 and |dy| <= 7 give row >= 0; the row ends at
+        // row + w <= (y + 8) * w <= d.len() (the invariant), and cx + N <= w,
+        // so the N bytes at row + cx lie in d, borrowed for 'a. [u8; N] has alignment 1.
+        unsafe { &*self.d.as_ptr().add(row + cx).cast::<[u8; N]>() }
+    }
+}
+
+dispatch! {
+    /// One row of [`support_map_into`]: `out[c] = 1` where `mid[c]` is an
+    /// edge, or at least `support` pixels of the 3x3 around it are (which, as
+    /// `mid[c]` is then not one, are its 8 neighbours), for `c` in `1..w-1`;
+    /// `top`, `bot` are the rows above and below, all of width `w = out.len()`.
+    fn support_row(top: &[u8], mid: &[u8], bot: &[u8], support: u32, out: &mut [u8]) {
+        let w = out.len();
+        if w < 3 {
+            return;
+        }
+        let n = w - 2;
+        // the three columns c-1, c, c+1 of each row, as equal-length slices
+        let (t, m, b) = (cols3(top, n), cols3(mid, n), cols3(bot, n));
+        // at most 9 edges: a threshold above 9 is never met, as with the u32
+        let thr = support.min(10) as u8;
+        for (i, o) in out[1..n + 1].iter_mut().enumerate() {
+            let mut count = 0u8;
+            for r in [&t, &m, &b] {
+                for col in r {
+                    count += (col[i] == EDGE) as u8;
+                }
+            }
+            *o = (m[1][i] == EDGE || count >= thr) as u8;
+        }
+    }
+}
+
+/// Columns `c-1`, `c`, `c+1` of `row` for `c` in `1..=n`, as three slices of length `n`.
+#[inline(always)]
+fn cols3(row: &[u8], n: usize) -> [&[u8]; 3] {
+    [&row[0..n], &row[1..n + 1], &row[2..n + 2]]
+}
+
+/// Step 4 for every pixel q of `e` (see [`super::supports`]), in `s` (resized
+/// to `e`'s size): 1 where q is an edge or at least `support` of its 8
+/// neighbours are, else 0. Only the first and last row and column are left
+/// as they were (corner tests never read them: q lies at most 6 pixels from
+/// p, p at least 7 from every side), so `s` can be reused without clearing.
+pub(super) fn support_map_into(e: &Plane<u8>, support: u32, s: &mut Vec<u8>) {
+    use rayon::prelude::*;
+    let (w, h) = (e.width as usize, e.height as usize);
+    s.resize(w * h, 0);
+    if w >= 3 && h >= 3 {
+        s[w..(h - 1) * w].par_chunks_mut(w).enumerate().for_each(|(k, out)| {
+            let rows = &e.data[k * w..(k + 3) * w];
+            support_row(&rows[..w], &rows[w..2 * w], &rows[2 * w..], support, out);
+        });
+    }
+}
+
+/// [`super::supports`] for p = (x, y), from the support map.
+///
+/// # Safety
+/// `7 <= x < w - 7` (`w` the window's width).
+#[inline(always)]
+unsafe fn supports_at(win: &Window<'_>, x: usize, t: usize) -> bool {
+    let (dx, dy) = CIRCLE[t & 15];
+    // SAFETY: |dx|, |dy| <= 3 (tested), so 2dy is in -6..=6 and the column
+    // x + 2dx in x-6..=x+6, which is >= 1 and < w - 1.
+    unsafe { win.supports((x as isize + 2 * dx as isize) as usize, 2 * dy as isize) }
+}
+
+/// The middle index of the branch starting at `s` of `mask` (as [`super::is_corner`]).
+#[inline(always)]
+fn branch_mid(mask: u32, s: u32) -> usize {
+    let doubled = mask | (mask << 16);
+    let len = (!(doubled >> s)).trailing_zeros().min(16);
+    ((s + (len - 1) / 2) % 16) as usize
+}
+
+/// [`super::is_corner`]'s decision from p's circle mask, `sup(t)` deciding Step 4.
+/// Returns what it returns; `sup` is called only where its answer can matter.
+#[inline(always)]
+pub(super) fn decide(mask: u32, p: &LfastParams, mut sup: impl FnMut(usize) -> bool) -> bool {
+    match p.mode {
+        Mode::Paper => {
+            // fewer than two points; or two opposite ones with p on their line
+            let rest = mask & mask.wrapping_sub(1);
+            if rest == 0 {
+                return false;
+            }
+            if rest & (rest - 1) == 0 && rest.trailing_zeros() - mask.trailing_zeros() == 8 {
+                return false;
+            }
+            let mut supported = 0;
+            let mut m = mask;
+            while m != 0 {
+                let t = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if sup(t) {
+                    supported += 1;
+                    if supported >= 2 {
+                        return true;
+                    }
+                }
+            }
+            false
+        }
+        Mode::Branch => {
+            if mask == 0 || mask == 0xffff {
+                return false;
+            }
+            let straight = |a: usize, b: usize| {
+                let d = a.abs_diff(b);
+                d.min(16 - d) >= 8 - p.straight_tol as usize
+            };
+            let prev = ((mask << 1) | (mask >> 15)) & 0xffff;
+            let starts = mask & !prev;
+            let rest = starts & (starts - 1);
+            if rest == 0 {
+                return false; // one branch
+            }
+            let m0 = branch_mid(mask, starts.trailing_zeros());
+            if rest & (rest - 1) == 0 {
+                // Two branches: a corner iff they are not straight and both supported.
+                let m1 = branch_mid(mask, rest.trailing_zeros());
+                return !straight(m0, m1) && sup(m0) && sup(m1);
+            }
+            // Three or more: a corner iff three are supported, or two that are not straight.
+            let mut first = None;
+            let mut n = 0;
+            let mut s = starts;
+            while s != 0 {
+                let t = branch_mid(mask, s.trailing_zeros());
+                s &= s - 1;
+                if sup(t) {
+                    n += 1;
+                    match first {
+                        None => first = Some(t),
+                        Some(a) => {
+                            if n >= 3 || !straight(a, t) {
+                                return true;
+                            }
+                        }
+                    }
+                }
+            }
+            false
+        }
+    }
+}
+
+/// Circle masks of the 32 pixels `xs..xs+32` of the window's row.
+///
+/// # Safety
+/// `7 <= xs` and `xs + 32 <= w - 7`.
+#[inline(always)]
+unsafe fn chunk_masks(win: &Window<'_>, xs: usize) -> [u16; CHUNK] {
+    // SAFETY: |dx|, |dy| <= 3, so xs + dx >= 4 and xs + dx + 32 <= w - 4.
+    let rows: [&[u8; CHUNK]; 16] = std::array::from_fn(|i| unsafe {
+        win.bytes((xs as isize + CIRCLE[i].0 as isize) as usize, CIRCLE[i].1 as isize)
+    });
+    let mut masks = [0u16; CHUNK];
+    for (j, m) in masks.iter_mut().enumerate() {
+        // bytes, not u16 lanes: twice the pixels per vector
+        let (mut lo, mut hi) = (0u8, 0u8);
+        for i in 0..8 {
+            lo |= ((rows[i][j] == EDGE) as u8) << i;
+            hi |= ((rows[i + 8][j] == EDGE) as u8) << i;
+        }
+        *m = lo as u16 | (hi as u16) << 8;
+    }
+    masks
+}
+
+/// Bit j set where `c[j]` is [`EDGE`].
+#[inline(always)]
+fn edge_bits(c: &[u8; CHUNK]) -> u32 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    {
+        use std::arch::x86_64::{__m128i, _mm_cmpeq_epi8, _mm_loadu_si128, _mm_movemask_epi8, _mm_set1_epi8};
+        const _: () = assert!(EDGE as i8 == -1);
+        // SAFETY: the cfg guarantees SSE2, all these intrinsics need; the two
+        // unaligned 16-byte loads read c[0..16] and c[16..32], in bounds.
+        unsafe {
+            let ff = _mm_set1_epi8(-1);
+            let a = _mm_loadu_si128(c.as_ptr().cast::<__m128i>());
+            let b = _mm_loadu_si128(c.as_ptr().add(16).cast::<__m128i>());
+            let lo = _mm_movemask_epi8(_mm_cmpeq_epi8(a, ff)) as u32 & 0xffff;
+            let hi = _mm_movemask_epi8(_mm_cmpeq_epi8(b, ff)) as u32 & 0xffff;
+            lo | hi << 16
+        }
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
+    {
+        let mut bits = 0u32;
+        for (j, &v) in c.iter().enumerate() {
+            bits |= ((v == EDGE) as u32) << j;
+        }
+        bits
+    }
+}
+
+dispatch! {
+    /// Appends to `out` the corners `[x, y]` of the window's row `y` with x in
+    /// `x0..x1` (raster order), where `mrow` (if any) is non-zero. Needs
+    /// `7 <= x0`, `x1 + 7 <= w` and `x1 - x0 >= 32` (panics otherwise).
+    pub(super) fn scan_row(win: &Window<'_>, y: u32, x0: usize, x1: usize, mrow: Option<&[u8]>,
+                           p: &LfastParams, out: &mut Vec<[u32; 2]>) {
+        assert!(x0 >= 7 && x1 + 7 <= win.w && x1 >= x0 + CHUNK, "scan_row: columns {x0}..{x1} of {}", win.w);
+        let mut xs = x0;
+        let mut skip = 0; // pixels at the start of this chunk done by the one before
+        loop {
+            // SAFETY: xs >= x0 >= 7 and xs + 32 <= x1, x1 + 7 <= w, asserted above
+            let mut bits = edge_bits(unsafe { win.bytes(xs, 0) });
+            if let Some(m) = mrow {
+                for (j, &v) in m[xs..xs + CHUNK].iter().enumerate() {
+                    bits &= !(((v == 0) as u32) << j);
+                }
+            }
+            bits &= u32::MAX << skip;
+            if bits != 0 {
+                // SAFETY: as above
+                let masks = unsafe { chunk_masks(win, xs) };
+                while bits != 0 {
+                    let j = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let x = xs + j;
+                    // SAFETY: 7 <= x0 <= x < x1 <= w - 7
+                    if decide(masks[j] as u32, p, |t| unsafe { supports_at(win, x, t) }) {
+                        out.push([x as u32, y]);
+                    }
+                }
+            }
+            if xs + CHUNK == x1 {
+                break;
+            }
+            // the last chunk ends at x1, overlapping the one before
+            let next = (xs + CHUNK).min(x1 - CHUNK);
+            skip = xs + CHUNK - next;
+            xs = next;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{circle_mask, is_corner, lfast, supports};
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// A `w x h` edge map: each pixel EDGE with probability `density`/256,
+    /// else 0, or (one in 16 non-edges) another value that is not EDGE.
+    fn edge_map(w: u32, h: u32, density: u64, seed: u64) -> Plane<u8> {
+        let mut r = SplitMix64::new(seed);
+        let data = (0..w * h)
+            .map(|_| {
+                let v = r.next_u64();
+                if v & 0xff < density {
+                    EDGE
+                } else if v >> 8 & 15 == 0 {
+                    (v >> 16) as u8 % 255
+                } else {
+                    0
+                }
+            })
+            .collect();
+        Plane::from_vec(w, h, data).expect("plane size")
+    }
+
+    #[test]
+    fn circle_offsets_within_three() {
+        // the SAFETY arguments of supports_at and chunk_masks rely on this
+        assert!(CIRCLE.iter().all(|&(dx, dy)| dx.abs() <= 3 && dy.abs() <= 3));
+    }
+
+    #[test]
+    fn window_refuses_missing_rows() {
+        let e = Plane::<u8>::new(20, 20);
+        let s = vec![0u8; 400];
+        assert!(Window::new(&e, &s, 6).is_none());
+        assert!(Window::new(&e, &s, 7).is_some() && Window::new(&e, &s, 12).is_some());
+        assert!(Window::new(&e, &s, 13).is_none());
+        assert!(Window::new(&e, &s[..399], 12).is_none());
+        assert!(Window::new(&Plane::<u8>::new(14, 20), &s, 10).is_none());
+    }
+
+    /// The reference scan: [`is_corner`] at every edge pixel of the border.
+    fn naive(e: &Plane<u8>, m: Option<&Plane<u8>>, p: &LfastParams) -> Vec<[u32; 2]> {
+        let (w, h, b) = (e.width, e.height, p.border.max(7));
+        let mut want = Vec::new();
+        for y in b..h.saturating_sub(b) {
+            for x in b..w.saturating_sub(b) {
+                let i = (y * w + x) as usize;
+                if e.data[i] == EDGE && m.is_none_or(|m| m.data[i] != 0) && is_corner(e, x as i32, y as i32, p) {
+                    want.push([x, y]);
+                }
+            }
+        }
+        want
+    }
+
+    #[test]
+    fn lfast_matches_is_corner_on_canny_edges() {
+        // edge maps of the real pipeline (thin lines, junctions) on random rectangles
+        let cfg = crate::Config::default();
+        for seed in 0..3u64 {
+            let mut r = SplitMix64::new(seed);
+            let (w, h) = (173, 121);
+            let mut img = Plane::from_vec(w, h, vec![90u8; (w * h) as usize]).expect("plane size");
+            for _ in 0..25 {
+                let (x0, y0) = (r.next_u64() % w as u64, r.next_u64() % h as u64);
+                let (rw, rh, v) = (5 + r.next_u64() % 60, 5 + r.next_u64() % 50, r.next_u64() as u8);
+                for y in y0..(y0 + rh).min(h as u64) {
+                    for x in x0..(x0 + rw).min(w as u64) {
+                        img.data[(y * w as u64 + x) as usize] = v;
+                    }
+                }
+            }
+            let e =
+                crate::cpu::fused::edges_fused(&img, cfg.delta_num(), crate::config::DELTA_DEN, cfg.alpha_pct).edges;
+            let mut corners = 0;
+            for mode in [Mode::Paper, Mode::Branch] {
+                for support in 1..=8 {
+                    for straight_tol in 0..=3 {
+                        let p = LfastParams { mode, support, straight_tol, border: 7 };
+                        let want = naive(&e, None, &p);
+                        corners += want.len();
+                        assert_eq!(lfast(&e, None, &p), want, "seed {seed} {p:?}");
+                    }
+                }
+            }
+            assert!(corners > 100, "seed {seed}: only {corners} corners, a weak test");
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+        #[test]
+        fn masks_and_supports_match_reference(w in 46u32..100, h in 15u32..30, density in 0u64..256,
+                                              seed in proptest::prelude::any::<u64>(), support in 1u32..=8) {
+            let e = edge_map(w, h, density, seed);
+            let mut smap = Vec::new();
+            support_map_into(&e, support, &mut smap);
+            for y in 7..h as usize - 7 {
+                let win = Window::new(&e, &smap, y).expect("rows inside");
+                let mut xs = 7;
+                while xs + CHUNK <= w as usize - 7 {
+                    // SAFETY: 7 <= xs, xs + 32 <= w - 7
+                    let masks = unsafe { chunk_masks(&win, xs) };
+                    for (j, &m) in masks.iter().enumerate() {
+                        let (x, yi) = ((xs + j) as i32, y as i32);
+                        proptest::prop_assert_eq!(m as u32, circle_mask(&e, x, yi));
+                        for t in 0..16 {
+                            // SAFETY: 7 <= x < w - 7
+                            let got = unsafe { supports_at(&win, xs + j, t) };
+                            proptest::prop_assert_eq!(got, supports(&e, x, yi, t, support), "({}, {}) t {}", x, y, t);
+                        }
+                    }
+                    xs += 7; // overlapping chunks: every column is covered
+                }
+            }
+        }
+
+        #[test]
+        fn lfast_matches_is_corner_everywhere(w in 15u32..100, h in 15u32..40, density in 0u64..256,
+                                              seed in proptest::prelude::any::<u64>(), paper in proptest::prelude::any::<bool>(),
+                                              support in 1u32..=8, straight_tol in 0u32..=3, border in 7u32..10,
+                                              masked in proptest::prelude::any::<bool>()) {
+            let e = edge_map(w, h, density, seed);
+            let m = masked.then(|| edge_map(w, h, 128, seed ^ 0x5eed));
+            let p = LfastParams { mode: if paper { Mode::Paper } else { Mode::Branch }, support, straight_tol, border };
+            let want = naive(&e, m.as_ref(), &p);
+            proptest::prop_assert_eq!(lfast(&e, m.as_ref(), &p), want);
+        }
+    }
+}
