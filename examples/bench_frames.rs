@@ -101,7 +101,8 @@ fn main() -> lfast::Result<()> {
         methods.insert(METHODS[1].into(), summary(&t, n, "mean_keypoints"));
     }
     if run(METHODS[2]) {
-        let (t, n) = time_passes(&frames, repeats, |img| orb.detect_and_compute(img.view()).expect("valid image").0.len());
+        let (t, n) =
+            time_passes(&frames, repeats, |img| orb.detect_and_compute(img.view()).expect("valid image").0.len());
         methods.insert(METHODS[2].into(), summary(&t, n, "mean_keypoints"));
     }
 

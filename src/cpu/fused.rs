@@ -315,7 +315,13 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
             let mut m8 = vec![0u8; w];
             for (k, (s_row, sec_row)) in s_band.chunks_mut(ws).zip(sec_band.chunks_mut(ws)).enumerate() {
                 let y = cy[j] + k as u32;
-                gradient_row(d.row(y), d.row((y + 1).min(h as u32 - 1)), &mut s_row[1..=w], &mut sec_row[1..=w], &mut m8);
+                gradient_row(
+                    d.row(y),
+                    d.row((y + 1).min(h as u32 - 1)),
+                    &mut s_row[1..=w],
+                    &mut sec_row[1..=w],
+                    &mut m8,
+                );
                 (s_row[0], s_row[w + 1]) = (0, 0);
                 band.add_row(cx, &m8);
             }
