@@ -29,7 +29,13 @@ pub struct Features {
 /// assert!(lfast::io::hex(&d).starts_with("a500"));
 /// ```
 pub fn hex(d: &Descriptor) -> String {
-    d.iter().map(|b| format!("{b:02x}")).collect()
+    const DIGITS: &[u8; 16] = b"0123456789abcdef";
+    let mut s = String::with_capacity(2 * d.len());
+    for &b in d {
+        s.push(DIGITS[(b >> 4) as usize] as char);
+        s.push(DIGITS[(b & 15) as usize] as char);
+    }
+    s
 }
 
 /// The JSON text of one image's features.
@@ -175,4 +181,17 @@ pub fn features_yaml(kps: &[KeyPoint], desc: &[Descriptor]) -> String {
     }
     s.push_str(" ]\n");
     s
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn hex_matches_format_for_every_byte() {
+        for b in 0..=255u8 {
+            let d = [b; 32];
+            assert_eq!(super::hex(&d), format!("{b:02x}").repeat(32));
+        }
+        let d: [u8; 32] = std::array::from_fn(|i| (i * 37 + 11) as u8);
+        assert_eq!(super::hex(&d), d.iter().map(|b| format!("{b:02x}")).collect::<String>());
+    }
 }
