@@ -91,7 +91,8 @@ fn main() -> lfast::Result<()> {
     if run(METHODS[0]) {
         let (t, n) = time_passes(&frames, repeats, |img| {
             let e = det.edge_image(img.view()).expect("valid image");
-            e.data.iter().filter(|&&v| v != 0).count()
+            // a vectorised count (byte sums over chunks of 255): this runs inside the timed loop
+            e.data.chunks(255).map(|c| c.iter().map(|&v| (v != 0) as u8).sum::<u8>() as usize).sum::<usize>()
         });
         methods.insert(METHODS[0].into(), summary(&t, n, "mean_edge_pixels"));
     }
