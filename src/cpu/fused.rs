@@ -1,14 +1,16 @@
 //! The fast path of SPEC 1-7 that detection uses: the same function as the
-//! staged modules (median -> ... -> hysteresis), computed in four row-parallel
-//! passes with vectorisable row kernels instead of nine full-image stages.
+//! staged modules (median -> ... -> hysteresis), computed in three row-parallel
+//! passes and one flood with vectorisable row kernels instead of nine full-image
+//! stages (docs/algorithm.md, "The fast path", says why each rewrite is exact).
 //! `tests` and the golden files check that it is bit-identical to [`edge_map`](super::edge_map).
 //!
 //! 1. median rows -> D
 //! 2. per cell row: LSD gradient rows -> S, direction sector, M8 + cell histograms
 //! 3. Otsu and window statistics from the cell histograms (tiny), turned into
-//!    four integer thresholds per column: M >= hi is STRONG, >= lo WEAK_STRONG, ...
-//! 4. NMS + classification rows -> classes
-//! 5. rules rows -> ruled classes, STRONG seeds; flood fill -> E
+//!    four integer thresholds on S per column: S >= hi is STRONG, >= lo WEAK_STRONG, ...
+//! 4. per band of rows: NMS + classification into a ring of three padded class
+//!    rows, rules rows -> ruled classes and the list of WEAK pixels
+//! 5. hysteresis in place from the WEAK pixels -> E
 
 use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use super::local_threshold::{BandHistograms, Cells};
