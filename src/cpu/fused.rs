@@ -52,6 +52,36 @@ fn sector_code(dx: i32, dy: i32) -> u8 {
     vertical + diagonal * (2 + opposite)
 }
 
+/// `num / den` in lowest terms when both fit the 16-bit median kernel
+/// (`den * |g - n|` and `num * g` at most 255 * 257 < 2^16), else `None`.
+fn small_ratio(num: u32, den: u32) -> Option<(u16, u16)> {
+    let g = {
+        let (mut a, mut b) = (num, den);
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a.max(1)
+    };
+    let (p, q) = (num / g, den / g);
+    (p <= 257 && q <= 257).then_some((p as u16, q as u16))
+}
+
+dispatch! {
+    /// [`median_row`] for a small ratio `num / den` (see [`small_ratio`]): the
+    /// same test `den * |g - n| > num * g` on 16-bit lanes, twice as many per vector.
+    fn median_row16(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: u16, den: u16) {
+        let w = mid.len();
+        let (up, down, out, flags) = (&up[..w], &down[..w], &mut out[..w], &mut flags[..w]);
+        for x in 1..w - 1 {
+            let g = mid[x] as u16;
+            let lim = num * g;
+            let d = |n: u8| den * (g as i16 - n as i16).unsigned_abs() > lim;
+            flags[x] = (d(up[x]) & d(down[x]) & d(mid[x - 1]) & d(mid[x + 1])) as u8;
+            out[x] = mid[x];
+        }
+    }
+}
+
 dispatch! {
     /// Interior of one median row: copies `mid` and flags noise pixels (x in 1..w-1).
     fn median_row(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: u32, den: u32) {
@@ -281,6 +311,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
     let EdgeScratch { denoised: d, edges, s, sec, thresholds, ruled, cells: layout } = sc;
 
     // 1. median
+    let ratio16 = small_ratio(delta_num, delta_den);
     d.reshape(img.width, img.height);
     d.data.par_chunks_mut(w).enumerate().for_each_init(
         || vec![0u8; w],
@@ -288,7 +319,10 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
             let up = img.row(y.saturating_sub(1) as u32);
             let mid = img.row(y as u32);
             let down = img.row((y + 1).min(h - 1) as u32);
-            median_row(up, mid, down, out, flags, delta_num, delta_den);
+            match ratio16 {
+                Some((p, q)) => median_row16(up, mid, down, out, flags, p, q),
+                None => median_row(up, mid, down, out, flags, delta_num, delta_den),
+            }
             for x in [0, w - 1] {
                 out[x] = mid[x];
                 flags[x] = median::is_noise(img, x as u32, y as u32, delta_num, delta_den) as u8;
@@ -430,6 +464,25 @@ mod tests {
     fn sqrt_floor_is_exact_over_the_gradient_range() {
         for s in 0..=2 * 510 * 510u32 {
             assert_eq!(sqrt_floor(s), s.isqrt(), "{s}");
+        }
+    }
+
+    #[test]
+    fn median_row16_equals_median_row() {
+        assert_eq!(small_ratio(1000, 10_000), Some((1, 10)));
+        assert_eq!(small_ratio(1234, 10_000), None);
+        assert_eq!(small_ratio(2570, 10), Some((257, 1)));
+        // every (g, n) pair, for ratios at and inside the 16-bit bounds
+        let row: Vec<u8> = (0..=255u8).collect();
+        for (num, den) in [(1, 10), (257, 257), (257, 1), (1, 257), (3, 7), (100, 100)] {
+            let (p, q) = small_ratio(num, den).unwrap();
+            for n in 0..=255u8 {
+                let other = vec![n; 256];
+                let (mut o32, mut f32_, mut o16, mut f16) = (vec![0; 256], vec![0; 256], vec![0; 256], vec![0; 256]);
+                median_row(&other, &row, &other, &mut o32, &mut f32_, num, den);
+                median_row16(&other, &row, &other, &mut o16, &mut f16, p, q);
+                assert_eq!((&o32, &f32_), (&o16, &f16), "{num}/{den} n={n}");
+            }
         }
     }
 
