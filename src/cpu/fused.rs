@@ -66,34 +66,39 @@ fn small_ratio(num: u32, den: u32) -> Option<(u16, u16)> {
     (p <= 257 && q <= 257).then_some((p as u16, q as u16))
 }
 
-dispatch! {
-    /// [`median_row`] for a small ratio `num / den` (see [`small_ratio`]): the
-    /// same test `den * |g - n| > num * g` on 16-bit lanes, twice as many per vector.
-    fn median_row16(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: u16, den: u16) {
-        let w = mid.len();
-        let (up, down, out, flags) = (&up[..w], &down[..w], &mut out[..w], &mut flags[..w]);
-        for x in 1..w - 1 {
-            let g = mid[x] as u16;
-            let lim = num * g;
-            let d = |n: u8| den * (g as i16 - n as i16).unsigned_abs() > lim;
-            flags[x] = (d(up[x]) & d(down[x]) & d(mid[x - 1]) & d(mid[x + 1])) as u8;
-            out[x] = mid[x];
-        }
+/// Interior of one median row (x in 1..w-1): copies `mid` and flags noise
+/// pixels, `den * |g - n| > num * g` for all four neighbours, in lanes of `T`.
+#[inline(always)]
+fn median_flags<T>(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: T, den: T)
+where
+    T: Copy + Ord + From<u8> + std::ops::Sub<Output = T> + std::ops::Mul<Output = T>,
+{
+    let w = mid.len();
+    let (up, down, out, flags) = (&up[..w], &down[..w], &mut out[..w], &mut flags[..w]);
+    for x in 1..w - 1 {
+        let g = T::from(mid[x]);
+        let lim = num * g;
+        let d = |n: u8| {
+            let n = T::from(n);
+            den * (g.max(n) - g.min(n)) > lim
+        };
+        flags[x] = (d(up[x]) & d(down[x]) & d(mid[x - 1]) & d(mid[x + 1])) as u8;
+        out[x] = mid[x];
     }
 }
 
 dispatch! {
-    /// Interior of one median row: copies `mid` and flags noise pixels (x in 1..w-1).
+    /// [`median_flags`] on 16-bit lanes, twice as many per vector, for a small
+    /// ratio `num / den` (see [`small_ratio`]).
+    fn median_row16(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: u16, den: u16) {
+        median_flags(up, mid, down, out, flags, num, den)
+    }
+}
+
+dispatch! {
+    /// [`median_flags`] on 32-bit lanes, for any ratio.
     fn median_row(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: u32, den: u32) {
-        let w = mid.len();
-        let (up, down, out, flags) = (&up[..w], &down[..w], &mut out[..w], &mut flags[..w]);
-        for x in 1..w - 1 {
-            let g = mid[x] as u32;
-            let lim = num * g;
-            let d = |n: u8| den * (g as i32 - n as i32).unsigned_abs() > lim;
-            flags[x] = (d(up[x]) & d(down[x]) & d(mid[x - 1]) & d(mid[x + 1])) as u8;
-            out[x] = mid[x];
-        }
+        median_flags(up, mid, down, out, flags, num, den)
     }
 }
 
