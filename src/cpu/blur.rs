@@ -75,32 +75,40 @@ dispatch! {
     }
 }
 
-dispatch! {
-    /// One weighted row of the vertical pass: `acc[x] += k * t[x]`.
-    fn vacc(t: &[u16], k: u32, acc: &mut [u32]) {
-        let acc = &mut acc[..t.len()];
-        for (a, &v) in acc.iter_mut().zip(t) {
-            *a += k * v as u32;
+/// One output row of the vertical pass from the `N` rows of horizontal sums
+/// it weighs: `out[x] = (sum_i k[i] * t[i][x] + 2^15) >> 16`, the sum kept in
+/// registers (no accumulator row to load and store per tap).
+#[inline(always)]
+fn vrow<const N: usize>(t: [&[u16]; N], k: &[u32; N], out: &mut [u8]) {
+    let n = out.len();
+    let t = t.map(|r| &r[..n]);
+    for x in 0..n {
+        let mut a = 0u32;
+        for i in 0..N {
+            a += k[i] * t[i][x] as u32;
         }
+        out[x] = ((a + (1 << 15)) >> 16) as u8;
     }
 }
 
 dispatch! {
-    /// The first weighted row of the vertical pass: `acc[x] = k * t[x]`.
-    fn vset(t: &[u16], k: u32, acc: &mut [u32]) {
-        let acc = &mut acc[..t.len()];
-        for (a, &v) in acc.iter_mut().zip(t) {
-            *a = k * v as u32;
-        }
+    /// [`vrow`] for 7 taps.
+    fn vrow7(t: [&[u16]; 7], k: &[u32; 7], out: &mut [u8]) {
+        vrow(t, k, out)
     }
 }
 
 dispatch! {
-    /// Rounds the Q16 sums to bytes.
-    fn vround(acc: &[u32], out: &mut [u8]) {
-        for (o, &a) in out.iter_mut().zip(acc) {
-            *o = ((a + (1 << 15)) >> 16) as u8;
-        }
+    /// [`vrow`] for 5 taps.
+    fn vrow5(t: [&[u16]; 5], k: &[u32; 5], out: &mut [u8]) {
+        vrow(t, k, out)
+    }
+}
+
+dispatch! {
+    /// [`vrow`] for 3 taps.
+    fn vrow3(t: [&[u16]; 3], k: &[u32; 3], out: &mut [u8]) {
+        vrow(t, k, out)
     }
 }
 
@@ -130,17 +138,19 @@ fn blur_n<const N: usize>(src: &Plane<u8>, kernel: &[u32; N], tmp: &mut Vec<u16>
             }
         }
     });
-    out.data.par_chunks_mut(w).enumerate().for_each_init(
-        || vec![0u32; w],
-        |acc, (y, row)| {
-            for (i, &k) in kernel.iter().enumerate() {
-                let yy = reflect101(y as i32 + i as i32 - r as i32, h as i32);
-                let t = &tmp[yy * w..(yy + 1) * w];
-                if i == 0 { vset(t, k, acc) } else { vacc(t, k, acc) }
-            }
-            vround(acc, row);
-        },
-    );
+    let tmp = &*tmp;
+    out.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let t: [&[u16]; N] = std::array::from_fn(|i| {
+            let yy = reflect101(y as i32 + i as i32 - r as i32, h as i32);
+            &tmp[yy * w..(yy + 1) * w]
+        });
+        // N is one of 7, 5, 3 (only gaussian_blur_into calls this); the conversions only name the length
+        match N {
+            7 => vrow7(t[..].try_into().expect("N == 7"), kernel[..].try_into().expect("N == 7"), row),
+            5 => vrow5(t[..].try_into().expect("N == 5"), kernel[..].try_into().expect("N == 5"), row),
+            _ => vrow3(t[..].try_into().expect("N == 3"), kernel[..].try_into().expect("N == 3"), row),
+        }
+    });
 }
 
 /// Any kernel length, straightforward loops (the reference for the fast paths).
