@@ -2,9 +2,9 @@
 // edge (255) iff it is STRONG, or WEAK and joined to a STRONG pixel through
 // 8-connected WEAK pixels.
 //
-// The CPU floods from the STRONG pixels. Here the same set comes from
-// connected-component labelling of the active (WEAK or STRONG) pixels with a
-// lock-free union-find (Playne & Hawick, "A New Algorithm for Parallel
+// The CPU floods each WEAK component that touches a STRONG pixel. Here the
+// same set comes from connected-component labelling of the active (WEAK or
+// STRONG) pixels with a lock-free union-find (Playne & Hawick, "A New Algorithm for Parallel
 // Connected-Component Labelling on GPUs", 2018): a component is an edge iff it
 // holds a STRONG pixel. Four dispatches, each one invocation per pixel of
 // every level (over the tile list), in this order:

@@ -55,9 +55,9 @@ pub fn gaussian_blur_into(src: &Plane<u8>, kernel: &[u32], tmp: &mut Vec<u16>, o
         return;
     }
     match kernel.len() {
-        7 => blur_n::<7>(src, kernel.try_into().expect("length checked"), tmp, out),
-        5 => blur_n::<5>(src, kernel.try_into().expect("length checked"), tmp, out),
-        3 => blur_n::<3>(src, kernel.try_into().expect("length checked"), tmp, out),
+        7 => blur_n::<7>(src, kernel.try_into().expect("length checked"), vrow7, tmp, out),
+        5 => blur_n::<5>(src, kernel.try_into().expect("length checked"), vrow5, tmp, out),
+        3 => blur_n::<3>(src, kernel.try_into().expect("length checked"), vrow3, tmp, out),
         _ => *out = blur_any(src, kernel),
     }
 }
@@ -112,7 +112,14 @@ dispatch! {
     }
 }
 
-fn blur_n<const N: usize>(src: &Plane<u8>, kernel: &[u32; N], tmp: &mut Vec<u16>, out: &mut Plane<u8>) {
+/// `vrow`: the dispatched [`vrow`] for `N` taps.
+fn blur_n<const N: usize>(
+    src: &Plane<u8>,
+    kernel: &[u32; N],
+    vrow: fn([&[u16]; N], &[u32; N], &mut [u8]),
+    tmp: &mut Vec<u16>,
+    out: &mut Plane<u8>,
+) {
     let (w, h) = (src.width as usize, src.height as usize);
     let r = N / 2;
     let k16: [u16; N] = kernel.map(|v| v as u16);
@@ -144,12 +151,7 @@ fn blur_n<const N: usize>(src: &Plane<u8>, kernel: &[u32; N], tmp: &mut Vec<u16>
             let yy = reflect101(y as i32 + i as i32 - r as i32, h as i32);
             &tmp[yy * w..(yy + 1) * w]
         });
-        // N is one of 7, 5, 3 (only gaussian_blur_into calls this); the conversions only name the length
-        match N {
-            7 => vrow7(t[..].try_into().expect("N == 7"), kernel[..].try_into().expect("N == 7"), row),
-            5 => vrow5(t[..].try_into().expect("N == 5"), kernel[..].try_into().expect("N == 5"), row),
-            _ => vrow3(t[..].try_into().expect("N == 3"), kernel[..].try_into().expect("N == 3"), row),
-        }
+        vrow(t, kernel, row);
     });
 }
 

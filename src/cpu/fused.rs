@@ -14,7 +14,7 @@
 
 use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use super::local_threshold::{BandHistograms, Cells};
-use super::simd::dispatch;
+use super::simd::{CHUNK, chunk, dispatch};
 use super::{hysteresis, median};
 use crate::image::Plane;
 use rayon::prelude::*;
@@ -100,15 +100,6 @@ dispatch! {
     fn median_row(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: u32, den: u32) {
         median_flags(up, mid, down, out, flags, num, den)
     }
-}
-
-/// Lanes of the chunked row kernels (32 bytes: one AVX2 register of u8).
-const CHUNK: usize = 32;
-
-/// `r[t0..t0 + CHUNK]` as an array, so that loops over it have a constant trip count and vectorise.
-#[inline(always)]
-fn chunk<T>(r: &[T], t0: usize) -> &[T; CHUNK] {
-    r[t0..t0 + CHUNK].try_into().expect("CHUNK elements")
 }
 
 dispatch! {

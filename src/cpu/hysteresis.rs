@@ -2,7 +2,8 @@
 //! a STRONG one through 8-connected WEAK pixels becomes an edge (255).
 //! Mirrors shaders/hysteresis.wgsl, which labels the 8-connected components of
 //! WEAK/STRONG pixels with a lock-free union-find and keeps the components that
-//! hold a STRONG pixel; here one flood fill from the STRONG pixels gives the same set.
+//! hold a STRONG pixel; here the WEAK pixels next to a STRONG one start flood
+//! fills over their WEAK components, which gives the same set.
 
 use super::classify::{EDGE, STRONG, WEAK};
 use crate::image::Plane;
@@ -17,46 +18,18 @@ use crate::image::Plane;
 /// assert_eq!(hysteresis(&c).data, vec![255, 255, 255, 0, 0]);
 /// ```
 pub fn hysteresis(classes: &Plane<u8>) -> Plane<u8> {
-    let seeds: Vec<usize> = classes.data.iter().enumerate().filter(|&(_, &c)| c == STRONG).map(|(i, _)| i).collect();
-    let mut out = Plane::new(classes.width, classes.height);
-    flood(classes, &seeds, &mut out);
+    let weak: Vec<usize> = classes.data.iter().enumerate().filter(|&(_, &c)| c == WEAK).map(|(i, _)| i).collect();
+    let mut out = classes.clone();
+    flood_in_place(&mut out, &weak);
     out
-}
-
-/// Hysteresis from the given STRONG pixels (linear indices, all of them)
-/// into `out` (reshaped and cleared here).
-pub fn flood(classes: &Plane<u8>, seeds: &[usize], out: &mut Plane<u8>) {
-    let (w, h) = (classes.width as usize, classes.height as usize);
-    out.reshape(classes.width, classes.height);
-    out.data.fill(0);
-    // (x, y) on the stack: no division per visited pixel
-    let mut stack: Vec<(u32, u32)> = Vec::with_capacity(seeds.len());
-    for &i in seeds {
-        out.data[i] = EDGE;
-        stack.push(((i % w) as u32, (i / w) as u32));
-    }
-    while let Some((x, y)) = stack.pop() {
-        let (x, y) = (x as usize, y as usize);
-        let (x0, x1) = (x.saturating_sub(1), (x + 1).min(w - 1));
-        for ny in y.saturating_sub(1)..=(y + 1).min(h - 1) {
-            let row = ny * w;
-            for nx in x0..=x1 {
-                let j = row + nx;
-                if out.data[j] == 0 && classes.data[j] == WEAK {
-                    out.data[j] = EDGE;
-                    stack.push((nx as u32, ny as u32));
-                }
-            }
-        }
-    }
 }
 
 /// Hysteresis in place: `e` holds the classes after the rules (STRONG, WEAK,
 /// NONE) and `weak` lists its WEAK pixels (linear indices, any order). Each
 /// WEAK pixel next to a STRONG or already promoted one starts a flood over its
 /// WEAK component; then STRONG and promoted pixels become EDGE and the rest 0.
-/// Equal to [`flood`] over the same classes; it visits the (fewer) WEAK pixels
-/// instead of every STRONG one, and needs no second plane.
+/// Flooding from every STRONG pixel gives the same set; this visits the
+/// (fewer) WEAK pixels instead, and needs no second plane.
 pub fn flood_in_place(e: &mut Plane<u8>, weak: &[usize]) {
     let (w, h) = (e.width as usize, e.height as usize);
     let data = &mut e.data[..w * h];

@@ -25,3 +25,12 @@ macro_rules! dispatch {
     };
 }
 pub(crate) use dispatch;
+
+/// Pixels per chunk of the chunked row kernels (32 bytes: one AVX2 register of u8).
+pub(crate) const CHUNK: usize = 32;
+
+/// `r[t0..t0 + CHUNK]` as an array, so that loops over it have a constant trip count and vectorise.
+#[inline(always)]
+pub(crate) fn chunk<T>(r: &[T], t0: usize) -> &[T; CHUNK] {
+    r[t0..t0 + CHUNK].try_into().expect("CHUNK elements")
+}

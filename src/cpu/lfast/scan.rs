@@ -9,11 +9,8 @@
 use super::{CIRCLE, LfastParams};
 use crate::config::Mode;
 use crate::cpu::classify::EDGE;
-use crate::cpu::simd::dispatch;
+use crate::cpu::simd::{CHUNK, dispatch};
 use crate::image::Plane;
-
-/// Pixels per chunk of the vectorised circle masks.
-const CHUNK: usize = 32;
 
 /// The rows `y-7..=y+7` of an edge map and of its support map, for reads
 /// without bounds checks.
