@@ -31,42 +31,83 @@ pub fn hysteresis(classes: &Plane<u8>) -> Plane<u8> {
 /// Flooding from every STRONG pixel gives the same set; this visits the
 /// (fewer) WEAK pixels instead, and needs no second plane.
 pub fn flood_in_place(e: &mut Plane<u8>, weak: &[usize]) {
+    let w = e.width as usize;
+    flood(e, weak.iter().map(|&i| ((i % w) as u32, (i / w) as u32)));
+    for v in e.data.iter_mut() {
+        *v = if *v == EDGE || *v == STRONG { EDGE } else { 0 };
+    }
+}
+
+/// [`flood_in_place`] for a plane whose STRONG pixels are already EDGE (the
+/// fused path's rules write them so), with `weak` as (x, y): the WEAK pixels
+/// left after the floods are cleared through the list, not by a pass over
+/// the whole plane.
+pub(crate) fn flood_edges(e: &mut Plane<u8>, weak: &[(u32, u32)]) {
+    debug_assert!(!e.data.contains(&STRONG));
+    flood(e, weak.iter().copied());
+    let w = e.width as usize;
+    for &(x, y) in weak {
+        let v = &mut e.data[y as usize * w + x as usize];
+        if *v == WEAK {
+            *v = 0;
+        }
+    }
+}
+
+/// The floods of [`flood_in_place`]: promotes to EDGE every WEAK pixel joined
+/// to a STRONG or EDGE one through WEAK pixels, visiting the WEAK pixels at
+/// `weak` (x, y) and the components they reach.
+fn flood(e: &mut Plane<u8>, weak: impl Iterator<Item = (u32, u32)>) {
     let (w, h) = (e.width as usize, e.height as usize);
     let data = &mut e.data[..w * h];
     let mut stack: Vec<(usize, usize)> = Vec::new();
-    for &i in weak {
+    for (x, y) in weak {
+        let (x, y) = (x as usize, y as usize);
+        let i = y * w + x;
         if data[i] != WEAK {
             continue; // promoted by an earlier flood
         }
-        let (x, y) = (i % w, i / w);
-        let (x0, x1) = (x.saturating_sub(1), (x + 1).min(w - 1));
-        let (y0, y1) = (y.saturating_sub(1), (y + 1).min(h - 1));
         let mut joined = false;
-        for ny in y0..=y1 {
-            for &v in &data[ny * w + x0..=ny * w + x1] {
-                joined |= v == STRONG || v == EDGE;
-            }
-        }
+        for_each_neighbour(x, y, w, h, |j, _, _| joined |= data[j] == STRONG || data[j] == EDGE);
         if !joined {
             continue;
         }
         data[i] = EDGE;
         stack.push((x, y));
         while let Some((x, y)) = stack.pop() {
-            let (x0, x1) = (x.saturating_sub(1), (x + 1).min(w - 1));
-            for ny in y.saturating_sub(1)..=(y + 1).min(h - 1) {
-                for nx in x0..=x1 {
-                    let j = ny * w + nx;
-                    if data[j] == WEAK {
-                        data[j] = EDGE;
-                        stack.push((nx, ny));
-                    }
+            for_each_neighbour(x, y, w, h, |j, nx, ny| {
+                if data[j] == WEAK {
+                    data[j] = EDGE;
+                    stack.push((nx, ny));
                 }
-            }
+            });
         }
     }
-    for v in data.iter_mut() {
-        *v = if *v == EDGE || *v == STRONG { EDGE } else { 0 };
+}
+
+/// Calls `f(index, x, y)` for the 8-neighbours of (x, y) inside a `w` x `h`
+/// plane: fixed offsets inside the plane (nearly every pixel), clipped loops
+/// on its border.
+#[inline(always)]
+fn for_each_neighbour(x: usize, y: usize, w: usize, h: usize, mut f: impl FnMut(usize, usize, usize)) {
+    if x > 0 && y > 0 && x + 1 < w && y + 1 < h {
+        let i = y * w + x;
+        f(i - w - 1, x - 1, y - 1);
+        f(i - w, x, y - 1);
+        f(i - w + 1, x + 1, y - 1);
+        f(i - 1, x - 1, y);
+        f(i + 1, x + 1, y);
+        f(i + w - 1, x - 1, y + 1);
+        f(i + w, x, y + 1);
+        f(i + w + 1, x + 1, y + 1);
+        return;
+    }
+    for ny in y.saturating_sub(1)..(y + 2).min(h) {
+        for nx in x.saturating_sub(1)..(x + 2).min(w) {
+            if (nx, ny) != (x, y) {
+                f(ny * w + nx, nx, ny);
+            }
+        }
     }
 }
 
@@ -149,7 +190,13 @@ mod tests {
                 weak.reverse(); // any order
             }
             flood_in_place(&mut e, &weak);
-            proptest::prop_assert_eq!(e, naive(&c));
+            proptest::prop_assert_eq!(&e, &naive(&c));
+            // the fused path's variant: STRONG already EDGE, weak as (x, y)
+            let mut f = c.clone();
+            f.data.iter_mut().filter(|v| **v == STRONG).for_each(|v| *v = EDGE);
+            let xy: Vec<(u32, u32)> = weak.iter().map(|&i| (i as u32 % w, i as u32 / w)).collect();
+            flood_edges(&mut f, &xy);
+            proptest::prop_assert_eq!(f, e);
         }
     }
 }
