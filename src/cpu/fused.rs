@@ -7,7 +7,7 @@
 //! 1. median rows -> D
 //! 2. per cell row: LSD gradient rows -> S, direction sector, M8 + cell histograms
 //! 3. Otsu and window statistics from the cell histograms (tiny), turned into
-//!    four integer thresholds on S per column: S >= hi is STRONG, >= lo WEAK_STRONG, ...
+//!    four integer thresholds on S per run of columns: S >= hi is STRONG, >= lo WEAK_STRONG, ...
 //! 4. per band of rows: NMS + classification into a ring of three padded class
 //!    rows, rules rows -> ruled classes and the list of WEAK pixels
 //! 5. hysteresis in place from the WEAK pixels -> E
@@ -16,7 +16,7 @@ use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use super::local_threshold::{BandHistograms, Cells};
 use super::simd::{CHUNK, chunk, dispatch};
 use super::{hysteresis, median};
-use crate::image::Plane;
+use crate::image::{GrayView, Plane};
 use rayon::prelude::*;
 
 /// D and E of one image.
@@ -66,15 +66,18 @@ fn small_ratio(num: u32, den: u32) -> Option<(u16, u16)> {
     (p <= 257 && q <= 257).then_some((p as u16, q as u16))
 }
 
-/// Interior of one median row (x in 1..w-1): copies `mid` and flags noise
-/// pixels, `den * |g - n| > num * g` for all four neighbours, in lanes of `T`.
+/// Interior of one median row (x in 1..w-1): flags noise pixels,
+/// `den * |g - n| > num * g` for all four neighbours, in lanes of `T`, and
+/// writes the 3x3 median where flagged, `mid` elsewhere. Every pixel's median
+/// is computed (branch-free, 32 lanes of u8 min/max) because a lane-parallel
+/// network costs less than one scalar median per flagged pixel.
 #[inline(always)]
-fn median_flags<T>(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: T, den: T)
+fn median_interior<T>(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], num: T, den: T)
 where
     T: Copy + Ord + From<u8> + std::ops::Sub<Output = T> + std::ops::Mul<Output = T>,
 {
     let w = mid.len();
-    let (up, down, out, flags) = (&up[..w], &down[..w], &mut out[..w], &mut flags[..w]);
+    let (up, down, out) = (&up[..w], &down[..w], &mut out[..w]);
     for x in 1..w - 1 {
         let g = T::from(mid[x]);
         let lim = num * g;
@@ -82,23 +85,34 @@ where
             let n = T::from(n);
             den * (g.max(n) - g.min(n)) > lim
         };
-        flags[x] = (d(up[x]) & d(down[x]) & d(mid[x - 1]) & d(mid[x + 1])) as u8;
-        out[x] = mid[x];
+        let flag = d(up[x]) & d(down[x]) & d(mid[x - 1]) & d(mid[x + 1]);
+        let m = median::median9([
+            up[x - 1],
+            up[x],
+            up[x + 1],
+            mid[x - 1],
+            mid[x],
+            mid[x + 1],
+            down[x - 1],
+            down[x],
+            down[x + 1],
+        ]);
+        out[x] = if flag { m } else { mid[x] };
     }
 }
 
 dispatch! {
-    /// [`median_flags`] on 16-bit lanes, twice as many per vector, for a small
+    /// [`median_interior`] on 16-bit lanes, twice as many per vector, for a small
     /// ratio `num / den` (see [`small_ratio`]).
-    fn median_row16(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: u16, den: u16) {
-        median_flags(up, mid, down, out, flags, num, den)
+    fn median_row16(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], num: u16, den: u16) {
+        median_interior(up, mid, down, out, num, den)
     }
 }
 
 dispatch! {
-    /// [`median_flags`] on 32-bit lanes, for any ratio.
-    fn median_row(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], flags: &mut [u8], num: u32, den: u32) {
-        median_flags(up, mid, down, out, flags, num, den)
+    /// [`median_interior`] on 32-bit lanes, for any ratio.
+    fn median_row(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], num: u32, den: u32) {
+        median_interior(up, mid, down, out, num, den)
     }
 }
 
@@ -126,16 +140,17 @@ dispatch! {
     }
 }
 
-/// Per-column integer thresholds of one window row, on S = dx² + dy² so that
-/// no square root is taken per pixel: with M = isqrt(S) >> 1, M >= t exactly when
-/// S >= (2t)². S >= hi is STRONG, else >= lo WEAK_STRONG, >= whi WEAK,
-/// >= wlo WEAK_WEAK (SPEC 6 as integers).
-#[derive(Clone, Debug, Default)]
-struct Thresholds {
-    hi: Vec<u32>,
-    lo: Vec<u32>,
-    whi: Vec<u32>,
-    wlo: Vec<u32>,
+/// The integer thresholds of one run of columns that use the same window, on
+/// S = dx² + dy² so that no square root is taken per pixel: with
+/// M = isqrt(S) >> 1, M >= t exactly when S >= (2t)². `t` is `[hi, lo, whi,
+/// wlo]`: S >= hi is STRONG, else >= lo WEAK_STRONG, >= whi WEAK, >= wlo
+/// WEAK_WEAK (SPEC 6 as integers). A window row is a list of such runs, about
+/// W/10 columns each, so the row kernel compares against constants.
+#[derive(Clone, Copy, Debug)]
+struct Piece {
+    x0: usize,
+    x1: usize,
+    t: [u32; 4],
 }
 
 /// The least S whose magnitude `isqrt(S) >> 1` reaches `t`.
@@ -153,37 +168,46 @@ fn mask(c: bool) -> u32 {
 dispatch! {
     /// NMS and classification of one row. `su`, `s`, `sd`, `sec` and `out` are
     /// padded rows of `w + 2` (column x at index x + 1, zeros outside the
-    /// image, so the borders need no special case); the thresholds have `w`.
-    fn classify_row(su: &[u32], s: &[u32], sd: &[u32], sec: &[u8], hi: &[u32], lo: &[u32], whi: &[u32], wlo: &[u32], out: &mut [u8]) {
-        let w = hi.len();
+    /// image, so the borders need no special case); `pieces` cover 0..w.
+    fn classify_row(su: &[u32], s: &[u32], sd: &[u32], sec: &[u8], pieces: &[Piece], out: &mut [u8]) {
+        let w = s.len() - 2;
         // left, centre and right neighbours of column t, all of length w
         fn lcr(r: &[u32], w: usize) -> (&[u32], &[u32], &[u32]) {
             (&r[..w], &r[1..w + 1], &r[2..w + 2])
         }
         let ((ul, uc, ur), (sl, sc, sr), (dl, dc, dr)) = (lcr(su, w), lcr(s, w), lcr(sd, w));
         let (sec, out) = (&sec[1..w + 1], &mut out[1..w + 1]);
-        let (hi, lo, whi, wlo) = (&hi[..w], &lo[..w], &whi[..w], &wlo[..w]);
-        // Most pixels lie below every threshold: such a chunk is all NONE.
-        let mut t0 = 0;
-        while t0 + CHUNK <= w {
-            let (sc_, wlo_) = (chunk(sc, t0), chunk(wlo, t0));
-            let o: &mut [u8; CHUNK] = (&mut out[t0..t0 + CHUNK]).try_into().expect("CHUNK bytes");
-            if sc_.iter().zip(wlo_).fold(false, |a, (v, lim)| a | (v >= lim)) {
-                let [ul, uc, ur, sl, sr, dl, dc, dr] = [ul, uc, ur, sl, sr, dl, dc, dr].map(|r| chunk(r, t0));
-                let [hi, lo, whi] = [hi, lo, whi].map(|r| chunk(r, t0));
-                let sec = chunk(sec, t0);
-                for t in 0..CHUNK {
-                    let n = [ul[t], uc[t], ur[t], sl[t], sc_[t], sr[t], dl[t], dc[t], dr[t]];
-                    o[t] = class_of_s(n, sec[t], [hi[t], lo[t], whi[t], wlo_[t]]);
+        for &Piece { x0, x1, t: th } in pieces {
+            if x1 - x0 < CHUNK {
+                for t in x0..x1 {
+                    let n = [ul[t], uc[t], ur[t], sl[t], sc[t], sr[t], dl[t], dc[t], dr[t]];
+                    out[t] = class_of_s(n, sec[t], th);
                 }
-            } else {
-                *o = [NONE; CHUNK];
+                continue;
             }
-            t0 += CHUNK;
-        }
-        for t in t0..w {
-            let n = [ul[t], uc[t], ur[t], sl[t], sc[t], sr[t], dl[t], dc[t], dr[t]];
-            out[t] = class_of_s(n, sec[t], [hi[t], lo[t], whi[t], wlo[t]]);
+            // chunks from x0; the last one ends at x1, overlapping its
+            // predecessor (recomputing a pixel writes the same class)
+            let mut next = x0;
+            loop {
+                let t0 = next.min(x1 - CHUNK);
+                let sc_ = chunk(sc, t0);
+                let o: &mut [u8; CHUNK] = (&mut out[t0..t0 + CHUNK]).try_into().expect("CHUNK bytes");
+                // Most pixels lie below every threshold: such a chunk is all NONE.
+                if sc_.iter().fold(false, |a, &v| a | (v >= th[3])) {
+                    let [ul, uc, ur, sl, sr, dl, dc, dr] = [ul, uc, ur, sl, sr, dl, dc, dr].map(|r| chunk(r, t0));
+                    let sec = chunk(sec, t0);
+                    for t in 0..CHUNK {
+                        let n = [ul[t], uc[t], ur[t], sl[t], sc_[t], sr[t], dl[t], dc[t], dr[t]];
+                        o[t] = class_of_s(n, sec[t], th);
+                    }
+                } else {
+                    *o = [NONE; CHUNK];
+                }
+                if t0 + CHUNK == x1 {
+                    break;
+                }
+                next = t0 + CHUNK;
+            }
         }
     }
 }
@@ -209,7 +233,8 @@ fn class_of_s(n: [u32; 9], k: u8, t: [u32; 4]) -> u8 {
 dispatch! {
     /// Rules 1 and 2 on one row, from padded class rows of `w + 2` (zeros
     /// outside the image: NONE is neither WEAK_STRONG nor WEAK_WEAK, so the
-    /// borders need no special case) into `out` (`w`).
+    /// borders need no special case) into `out` (`w`). STRONG is written as
+    /// EDGE, which it becomes in hysteresis anyway (see `flood_edges`).
     fn rules_row(cu: &[u8], c: &[u8], cd: &[u8], out: &mut [u8]) {
         let w = out.len();
         let (cu, c, cd) = (&cu[..w + 2], &c[..w + 2], &cd[..w + 2]);
@@ -223,9 +248,11 @@ dispatch! {
             }
             let v = c[x + 1];
             out[x] = if v == WEAK_STRONG {
-                if ws { STRONG } else { WEAK }
+                if ws { EDGE } else { WEAK }
             } else if v == WEAK_WEAK {
                 if ww { NONE } else { WEAK }
+            } else if v == STRONG {
+                EDGE
             } else {
                 v
             };
@@ -277,7 +304,7 @@ pub struct EdgeScratch {
     pub edges: Plane<u8>,
     s: Vec<u32>,
     sec: Vec<u8>,
-    thresholds: Vec<Thresholds>,
+    thresholds: Vec<Vec<Piece>>,
     ruled: Plane<u8>,
     /// The window and cell layout of the last image size (levels keep their sizes from frame to frame).
     cells: Option<Cells>,
@@ -290,16 +317,17 @@ const BAND_ROWS: usize = 32;
 /// D and E of `img` (SPEC 1-7), equal to [`edge_map`](super::edge_map)'s.
 pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u32) -> FastEdges {
     let mut sc = EdgeScratch::default();
-    edges_fused_into(img, delta_num, delta_den, alpha_pct, &mut sc);
+    edges_fused_into(img.view(), delta_num, delta_den, alpha_pct, &mut sc);
     FastEdges { denoised: sc.denoised, edges: sc.edges }
 }
 
 /// [`edges_fused`] into reused buffers: D and E end up in `sc.denoised` and `sc.edges`.
-pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u32, sc: &mut EdgeScratch) {
-    let (w, h) = (img.width as usize, img.height as usize);
-    if w < 3 || img.is_empty() {
+/// `img` is borrowed row by row (any stride), so a caller's frame needs no copy.
+pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha_pct: u32, sc: &mut EdgeScratch) {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    if w < 3 || h == 0 {
         // The row kernels need an interior; tiny images take the staged path.
-        let em = super::edge_map_with(img, delta_num, delta_den, alpha_pct);
+        let em = super::edge_map_with(&img.to_plane(), delta_num, delta_den, alpha_pct);
         sc.denoised = em.denoised;
         sc.edges = em.edges;
         return;
@@ -308,30 +336,25 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
 
     // 1. median
     let ratio16 = small_ratio(delta_num, delta_den);
-    d.reshape(img.width, img.height);
-    d.data.par_chunks_mut(w).enumerate().for_each_init(
-        || vec![0u8; w],
-        |flags, (y, out)| {
-            let up = img.row(y.saturating_sub(1) as u32);
-            let mid = img.row(y as u32);
-            let down = img.row((y + 1).min(h - 1) as u32);
-            match ratio16 {
-                Some((p, q)) => median_row16(up, mid, down, out, flags, p, q),
-                None => median_row(up, mid, down, out, flags, delta_num, delta_den),
-            }
-            for x in [0, w - 1] {
-                out[x] = mid[x];
-                flags[x] = median::is_noise(img, x as u32, y as u32, delta_num, delta_den) as u8;
-            }
-            for_each_nonzero(flags, |x| out[x] = median::median3x3(img, x as u32, y as u32));
-        },
-    );
+    d.reshape(img.width(), img.height());
+    d.data.par_chunks_mut(w).enumerate().for_each(|(y, out)| {
+        let up = img.row(y.saturating_sub(1) as u32);
+        let mid = img.row(y as u32);
+        let down = img.row((y + 1).min(h - 1) as u32);
+        match ratio16 {
+            Some((p, q)) => median_row16(up, mid, down, out, p, q),
+            None => median_row(up, mid, down, out, delta_num, delta_den),
+        }
+        // A border pixel is its own clamped left or right neighbour, |G - G| = 0
+        // is never above delta G, so it is never noise.
+        (out[0], out[w - 1]) = (mid[0], mid[w - 1]);
+    });
 
     // 2. gradient, sector, cell histograms of M8, one cell row per task; S and
     //    the sector in padded rows of w + 2 (see `classify_row`)
     let ws = w + 2;
-    if layout.as_ref().is_none_or(|c| (c.cx.last(), c.cy.last()) != (Some(&img.width), Some(&img.height))) {
-        *layout = Some(Cells::new(img.width, img.height));
+    if layout.as_ref().is_none_or(|c| (c.cx.last(), c.cy.last()) != (Some(&img.width()), Some(&img.height()))) {
+        *layout = Some(Cells::new(img.width(), img.height()));
     }
     let layout = layout.as_ref().expect("set just above");
     s.resize(ws * h, 0);
@@ -369,7 +392,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
         }
     }
     let Some(k) = super::otsu::otsu(&hist) else {
-        edges.reshape(img.width, img.height);
+        edges.reshape(img.width(), img.height());
         edges.data.fill(0);
         return;
     };
@@ -379,11 +402,9 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
     let win = &layout.windows;
     let nx = win.xs.len();
     thresholds.resize_with(win.ys.len(), Default::default);
-    for (j, t) in thresholds.iter_mut().enumerate() {
-        for v in [&mut t.hi, &mut t.lo, &mut t.whi, &mut t.wlo] {
-            v.resize(w, 0);
-        }
-        // one set of thresholds per window, written over the columns that use it
+    for (j, pieces) in thresholds.iter_mut().enumerate() {
+        pieces.clear();
+        // one set of thresholds per run of columns that use the same window
         let mut x0 = 0;
         while x0 < w {
             let i = win.col_window[x0];
@@ -392,10 +413,8 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
             // 300 M >= (100 ± alpha) V3  <=>  M >= ceil((100 ± alpha) V3 / 300)
             let tl1 = ((100 + alpha_pct) * v3).div_ceil(300).min(255);
             let tl2 = ((100 - alpha_pct) * v3).div_ceil(300);
-            t.hi[x0..x1].fill(s_of_m(t1.max(tl1)));
-            t.lo[x0..x1].fill(s_of_m(t1.min(tl1)));
-            t.whi[x0..x1].fill(s_of_m(t2.max(tl2)));
-            t.wlo[x0..x1].fill(s_of_m(t2.min(tl2)));
+            let t = [t1.max(tl1), t1.min(tl1), t2.max(tl2), t2.min(tl2)].map(s_of_m);
+            pieces.push(Piece { x0, x1, t });
             x0 = x1;
         }
     }
@@ -414,13 +433,13 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
         let y = y as usize;
         let su = if y == 0 { &zeros[..] } else { row(y - 1) };
         let sd = if y + 1 == h { &zeros[..] } else { row(y + 1) };
-        let t = &thresholds[win.row_window[y] as usize];
-        classify_row(su, row(y), sd, &sec[y * ws..(y + 1) * ws], &t.hi, &t.lo, &t.whi, &t.wlo, out);
+        let pieces = &thresholds[win.row_window[y] as usize];
+        classify_row(su, row(y), sd, &sec[y * ws..(y + 1) * ws], pieces, out);
         (out[0], out[w + 1]) = (0, 0);
     };
-    ruled.reshape(img.width, img.height);
+    ruled.reshape(img.width(), img.height());
     let band_rows = BAND_ROWS.min(h);
-    let weak: Vec<usize> = ruled
+    let weak: Vec<(u32, u32)> = ruled
         .data
         .par_chunks_mut(band_rows * w)
         .enumerate()
@@ -436,7 +455,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
                 rules_row(&ring[0], &ring[1], &ring[2], out);
                 for_each_nonzero(out, |x| {
                     if out[x] == WEAK {
-                        weak.push(y * w + x);
+                        weak.push((x as u32, y as u32));
                     }
                 });
                 ring.rotate_left(1);
@@ -446,7 +465,7 @@ pub fn edges_fused_into(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_p
         .collect();
 
     // 5. hysteresis in place; E is the ruled plane afterwards
-    hysteresis::flood_in_place(ruled, &weak);
+    hysteresis::flood_edges(ruled, &weak);
     std::mem::swap(ruled, edges);
     debug_assert!(edges.data.iter().all(|&v| v == 0 || v == EDGE));
 }
@@ -464,7 +483,7 @@ mod tests {
     }
 
     #[test]
-    fn median_row16_equals_median_row() {
+    fn median_rows_equal_the_scalar_definition() {
         assert_eq!(small_ratio(1000, 10_000), Some((1, 10)));
         assert_eq!(small_ratio(1234, 10_000), None);
         assert_eq!(small_ratio(2570, 10), Some((257, 1)));
@@ -474,10 +493,17 @@ mod tests {
             let (p, q) = small_ratio(num, den).unwrap();
             for n in 0..=255u8 {
                 let other = vec![n; 256];
-                let (mut o32, mut f32_, mut o16, mut f16) = (vec![0; 256], vec![0; 256], vec![0; 256], vec![0; 256]);
-                median_row(&other, &row, &other, &mut o32, &mut f32_, num, den);
-                median_row16(&other, &row, &other, &mut o16, &mut f16, p, q);
-                assert_eq!((&o32, &f32_), (&o16, &f16), "{num}/{den} n={n}");
+                let (mut o32, mut o16) = (vec![0; 256], vec![0; 256]);
+                median_row(&other, &row, &other, &mut o32, num, den);
+                median_row16(&other, &row, &other, &mut o16, p, q);
+                assert_eq!(o32[1..255], o16[1..255], "{num}/{den} n={n}");
+                // the scalar definition: the median (here n) where flagged
+                let img = Plane::from_vec(256, 3, [&other[..], &row, &other].concat()).unwrap();
+                for x in 1..255u32 {
+                    let want =
+                        if median::is_noise(&img, x, 1, num, den) { median::median3x3(&img, x, 1) } else { x as u8 };
+                    assert_eq!(o32[x as usize], want, "{num}/{den} n={n} x={x}");
+                }
             }
         }
     }
@@ -526,6 +552,21 @@ mod tests {
             let img = noise_image(w, h, seed, levels);
             let em = edge_map_with(&img, num, 10_000, alpha);
             let f = edges_fused(&img, num, 10_000, alpha);
+            proptest::prop_assert_eq!(&f.denoised, &em.denoised);
+            proptest::prop_assert_eq!(&f.edges, &em.edges);
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+        /// Widths from 320 on give threshold runs of 32 columns and more, so
+        /// the chunked kernels (and their overlapping last chunk) run.
+        #[test]
+        fn equals_the_staged_pipeline_when_wide(w in 320u32..700, h in 1u32..40, seed in proptest::prelude::any::<u64>(),
+                                                levels in 0u64..40, alpha in 0u32..100) {
+            let img = noise_image(w, h, seed, levels);
+            let em = edge_map_with(&img, 1000, 10_000, alpha);
+            let f = edges_fused(&img, 1000, 10_000, alpha);
             proptest::prop_assert_eq!(&f.denoised, &em.denoised);
             proptest::prop_assert_eq!(&f.edges, &em.edges);
         }

@@ -205,20 +205,34 @@ impl CpuDetector {
     /// The improved Canny edge map E of `image` (255 = edge), by the fused
     /// fast path; identical to `edges(image)?.edges`.
     pub fn edge_image(&self, image: GrayView<'_>) -> Result<Plane<u8>> {
+        let mut out = Plane::default();
+        self.edge_image_into(image, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`edge_image`](Self::edge_image) into `out`, reusing its allocation:
+    /// with the same `out` from frame to frame, nothing is allocated or copied
+    /// (the input is read in place, the map is swapped with the workspace's).
+    /// On an error `out` is left as it was.
+    ///
+    /// ```
+    /// use lfast::{Config, Plane, cpu::CpuDetector};
+    /// let det = CpuDetector::new(Config::default()).unwrap();
+    /// let img = Plane::from_vec(64, 48, (0..64 * 48).map(|i| if i % 64 < 32 { 20 } else { 220 }).collect()).unwrap();
+    /// let mut e = Plane::default();
+    /// det.edge_image_into(img.view(), &mut e).unwrap();
+    /// assert_eq!((e.width, e.height), (64, 48));
+    /// assert!(e.data.iter().any(|&v| v == 255)); // the vertical step at x = 32
+    /// ```
+    pub fn edge_image_into(&self, image: GrayView<'_>, out: &mut Plane<u8>) -> Result<()> {
         image.check()?;
-        Ok(self.with_workspace(|ws| {
-            ws.levels.resize_with(1, Default::default);
+        self.with_workspace(|ws| {
             ws.edges.resize_with(1, Default::default);
-            image.copy_into(&mut ws.levels[0]);
-            fused::edges_fused_into(
-                &ws.levels[0],
-                self.cfg.delta_num(),
-                DELTA_DEN,
-                self.cfg.alpha_pct,
-                &mut ws.edges[0],
-            );
-            ws.edges[0].edges.clone()
-        }))
+            let sc = &mut ws.edges[0];
+            fused::edges_fused_into(image, self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct, sc);
+            std::mem::swap(&mut sc.edges, out);
+        });
+        Ok(())
     }
 
     /// The improved Canny edge map of `image` with all its intermediates (the
@@ -365,7 +379,7 @@ impl CpuDetector {
             if img.width <= 2 * b || img.height <= 2 * b {
                 return Vec::new();
             }
-            fused::edges_fused_into(img, self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct, em);
+            fused::edges_fused_into(img.view(), self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct, em);
             let cands = lfast::lfast(&em.edges, masks.as_ref().map(|m| &m[l]), &params);
             let resp = response::responses(&em.denoised, &cands);
             corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
