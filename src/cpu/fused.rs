@@ -439,11 +439,11 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
     };
     ruled.reshape(img.width(), img.height());
     let band_rows = BAND_ROWS.min(h);
-    let weak: Vec<(u32, u32)> = ruled
+    let weak: Vec<Vec<(u32, u32)>> = ruled
         .data
         .par_chunks_mut(band_rows * w)
         .enumerate()
-        .flat_map_iter(|(b, out)| {
+        .map(|(b, out)| {
             let y0 = b * band_rows;
             let mut ring = [vec![0u8; ws], vec![0u8; ws], vec![0u8; ws]];
             classify(y0 as isize - 1, &mut ring[0]);
@@ -464,8 +464,8 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
         })
         .collect();
 
-    // 5. hysteresis in place; E is the ruled plane afterwards
-    hysteresis::flood_edges(ruled, &weak);
+    // 5. hysteresis in place, band by band; E is the ruled plane afterwards
+    hysteresis::flood_edges_banded(ruled, &weak, band_rows);
     std::mem::swap(ruled, edges);
     debug_assert!(edges.data.iter().all(|&v| v == 0 || v == EDGE));
 }

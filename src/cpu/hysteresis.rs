@@ -32,21 +32,45 @@ pub fn hysteresis(classes: &Plane<u8>) -> Plane<u8> {
 /// (fewer) WEAK pixels instead, and needs no second plane.
 pub fn flood_in_place(e: &mut Plane<u8>, weak: &[usize]) {
     let w = e.width as usize;
-    flood(e, weak.iter().map(|&i| ((i % w) as u32, (i / w) as u32)));
+    if w == 0 {
+        return;
+    }
+    flood(&mut e.data, w, weak.iter().map(|&i| ((i % w) as u32, (i / w) as u32)));
     for v in e.data.iter_mut() {
         *v = if *v == EDGE || *v == STRONG { EDGE } else { 0 };
     }
 }
 
 /// [`flood_in_place`] for a plane whose STRONG pixels are already EDGE (the
-/// fused path's rules write them so), with `weak` as (x, y): the WEAK pixels
-/// left after the floods are cleared through the list, not by a pass over
-/// the whole plane.
-pub(crate) fn flood_edges(e: &mut Plane<u8>, weak: &[(u32, u32)]) {
+/// fused path's rules write them so), cut into bands of `band_rows` rows:
+/// `weak[k]` lists the WEAK pixels (x, y) of band k. Each band is flooded on
+/// its own thread with the other bands as walls; then one serial flood starts
+/// from the WEAK pixels on the bands' first and last rows, which is where a
+/// component that crosses bands continues (each band-local piece of a WEAK
+/// component is promoted whole or not at all, so a piece left WEAK that should
+/// be promoted touches a promoted pixel across a band edge). The WEAK pixels
+/// left after that are cleared through the lists, not by a pass over the plane.
+pub(crate) fn flood_edges_banded(e: &mut Plane<u8>, weak: &[Vec<(u32, u32)>], band_rows: usize) {
+    use rayon::prelude::*;
     debug_assert!(!e.data.contains(&STRONG));
-    flood(e, weak.iter().copied());
     let w = e.width as usize;
-    for &(x, y) in weak {
+    if w == 0 || e.height == 0 {
+        return;
+    }
+    e.data.par_chunks_mut(band_rows * w).zip(weak).enumerate().for_each(|(b, (band, weak))| {
+        let y0 = (b * band_rows) as u32;
+        flood(band, w, weak.iter().map(|&(x, y)| (x, y - y0)));
+    });
+    let h = e.height as usize;
+    let mut seams = Vec::new();
+    for y0 in (band_rows..h).step_by(band_rows) {
+        for y in [y0 - 1, y0] {
+            let row = &e.data[y * w..(y + 1) * w];
+            seams.extend(row.iter().enumerate().filter(|&(_, &v)| v == WEAK).map(|(x, _)| (x as u32, y as u32)));
+        }
+    }
+    flood(&mut e.data, w, seams.into_iter());
+    for &(x, y) in weak.iter().flatten() {
         let v = &mut e.data[y as usize * w + x as usize];
         if *v == WEAK {
             *v = 0;
@@ -54,12 +78,13 @@ pub(crate) fn flood_edges(e: &mut Plane<u8>, weak: &[(u32, u32)]) {
     }
 }
 
-/// The floods of [`flood_in_place`]: promotes to EDGE every WEAK pixel joined
-/// to a STRONG or EDGE one through WEAK pixels, visiting the WEAK pixels at
-/// `weak` (x, y) and the components they reach.
-fn flood(e: &mut Plane<u8>, weak: impl Iterator<Item = (u32, u32)>) {
-    let (w, h) = (e.width as usize, e.height as usize);
-    let data = &mut e.data[..w * h];
+/// The floods of [`flood_in_place`] over the rows in `data` (`w` wide):
+/// promotes to EDGE every WEAK pixel joined to a STRONG or EDGE one through
+/// WEAK pixels, visiting the WEAK pixels at `weak` ((x, y), y counted from
+/// `data`'s first row) and the components they reach within `data`.
+fn flood(data: &mut [u8], w: usize, weak: impl Iterator<Item = (u32, u32)>) {
+    let h = data.len() / w;
+    let data = &mut data[..w * h];
     let mut stack: Vec<(usize, usize)> = Vec::new();
     for (x, y) in weak {
         let (x, y) = (x as usize, y as usize);
@@ -168,6 +193,18 @@ mod tests {
         let n_path = c.data.iter().filter(|&&v| v != NONE).count();
         assert_eq!(e.data.iter().filter(|&&v| v == EDGE).count(), n_path);
         assert_eq!(e, naive(&c));
+        // banded: the path crosses every band edge, the seed is in the last band
+        for band_rows in [1, 2, 3, 4, 9] {
+            let mut f = c.clone();
+            f.data.iter_mut().filter(|v| **v == STRONG).for_each(|v| *v = EDGE);
+            let mut bands = vec![Vec::new(); (h as usize).div_ceil(band_rows)];
+            for (i, _) in c.data.iter().enumerate().filter(|&(_, &v)| v == WEAK) {
+                let (x, y) = (i as u32 % w, i as u32 / w);
+                bands[y as usize / band_rows].push((x, y));
+            }
+            flood_edges_banded(&mut f, &bands, band_rows);
+            assert_eq!(f, e, "band_rows {band_rows}");
+        }
     }
 
     #[test]
@@ -191,11 +228,16 @@ mod tests {
             }
             flood_in_place(&mut e, &weak);
             proptest::prop_assert_eq!(&e, &naive(&c));
-            // the fused path's variant: STRONG already EDGE, weak as (x, y)
+            // the fused path's variant: STRONG already EDGE, weak as (x, y) per band
+            let band_rows = 1 + (seed % 5) as usize;
             let mut f = c.clone();
             f.data.iter_mut().filter(|v| **v == STRONG).for_each(|v| *v = EDGE);
-            let xy: Vec<(u32, u32)> = weak.iter().map(|&i| (i as u32 % w, i as u32 / w)).collect();
-            flood_edges(&mut f, &xy);
+            let mut bands = vec![Vec::new(); (h as usize).div_ceil(band_rows)];
+            for &i in &weak {
+                let (x, y) = (i as u32 % w, i as u32 / w);
+                bands[y as usize / band_rows].push((x, y));
+            }
+            flood_edges_banded(&mut f, &bands, band_rows);
             proptest::prop_assert_eq!(f, e);
         }
     }
