@@ -14,7 +14,7 @@
 
 use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use super::local_threshold::{BandHistograms, Cells};
-use super::simd::{CHUNK, chunk, dispatch};
+use super::simd::{CHUNK, chunk, dispatch, for_each_eq};
 use super::{hysteresis, median};
 use crate::image::{GrayView, Plane};
 use rayon::prelude::*;
@@ -453,11 +453,7 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
                 let y = y0 + k;
                 classify(y as isize + 1, &mut ring[2]);
                 rules_row(&ring[0], &ring[1], &ring[2], out);
-                for_each_nonzero(out, |x| {
-                    if out[x] == WEAK {
-                        weak.push((x as u32, y as u32));
-                    }
-                });
+                for_each_eq(out, WEAK, |x| weak.push((x as u32, y as u32)));
                 ring.rotate_left(1);
             }
             weak

@@ -34,3 +34,69 @@ pub(crate) const CHUNK: usize = 32;
 pub(crate) fn chunk<T>(r: &[T], t0: usize) -> &[T; CHUNK] {
     r[t0..t0 + CHUNK].try_into().expect("CHUNK elements")
 }
+
+/// Bit j set where `c[j] == value`: two 16-byte compares and movemasks
+/// (SSE2, every x86-64 has it), or a plain loop elsewhere.
+#[inline(always)]
+pub(crate) fn eq_bits(c: &[u8; CHUNK], value: u8) -> u32 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    {
+        use std::arch::x86_64::{__m128i, _mm_cmpeq_epi8, _mm_loadu_si128, _mm_movemask_epi8, _mm_set1_epi8};
+        // SAFETY: the cfg guarantees SSE2, all these intrinsics need; the two
+        // unaligned 16-byte loads read c[0..16] and c[16..32], in bounds.
+        unsafe {
+            let v = _mm_set1_epi8(value as i8);
+            let a = _mm_loadu_si128(c.as_ptr().cast::<__m128i>());
+            let b = _mm_loadu_si128(c.as_ptr().add(16).cast::<__m128i>());
+            let lo = _mm_movemask_epi8(_mm_cmpeq_epi8(a, v)) as u32 & 0xffff;
+            let hi = _mm_movemask_epi8(_mm_cmpeq_epi8(b, v)) as u32 & 0xffff;
+            lo | hi << 16
+        }
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
+    {
+        let mut bits = 0u32;
+        for (j, &v) in c.iter().enumerate() {
+            bits |= ((v == value) as u32) << j;
+        }
+        bits
+    }
+}
+
+/// Calls `f(x)` for each `x` with `v[x] == value`, in order, 32 bytes per
+/// compare (rows of classes are mostly other values).
+#[inline]
+pub(crate) fn for_each_eq(v: &[u8], value: u8, mut f: impl FnMut(usize)) {
+    let mut x = 0;
+    while x + CHUNK <= v.len() {
+        let mut bits = eq_bits(chunk(v, x), value);
+        while bits != 0 {
+            f(x + bits.trailing_zeros() as usize);
+            bits &= bits - 1;
+        }
+        x += CHUNK;
+    }
+    for (k, &b) in v[x..].iter().enumerate() {
+        if b == value {
+            f(x + k);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eq_bits_and_for_each_eq_find_every_match() {
+        for len in [0usize, 1, 31, 32, 33, 64, 100] {
+            let v: Vec<u8> = (0..len).map(|i| [2u8, 0, 255, 2, 1, 130, 0x82, 3][(i * 7 + i / 3) % 8]).collect();
+            for value in [0u8, 2, 255, 0x82] {
+                let mut got = vec![];
+                for_each_eq(&v, value, |x| got.push(x));
+                let want: Vec<usize> = (0..len).filter(|&i| v[i] == value).collect();
+                assert_eq!(got, want, "len {len} value {value}");
+            }
+        }
+    }
+}

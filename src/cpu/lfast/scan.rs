@@ -9,7 +9,7 @@
 use super::{CIRCLE, LfastParams};
 use crate::config::Mode;
 use crate::cpu::classify::EDGE;
-use crate::cpu::simd::{CHUNK, dispatch};
+use crate::cpu::simd::{CHUNK, dispatch, eq_bits};
 use crate::image::Plane;
 
 /// The rows `y-7..=y+7` of an edge map and of its support map, for reads
@@ -227,34 +227,6 @@ unsafe fn chunk_masks(win: &Window<'_>, xs: usize) -> [u16; CHUNK] {
     masks
 }
 
-/// Bit j set where `c[j]` is [`EDGE`].
-#[inline(always)]
-fn edge_bits(c: &[u8; CHUNK]) -> u32 {
-    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-    {
-        use std::arch::x86_64::{__m128i, _mm_cmpeq_epi8, _mm_loadu_si128, _mm_movemask_epi8, _mm_set1_epi8};
-        const _: () = assert!(EDGE as i8 == -1);
-        // SAFETY: the cfg guarantees SSE2, all these intrinsics need; the two
-        // unaligned 16-byte loads read c[0..16] and c[16..32], in bounds.
-        unsafe {
-            let ff = _mm_set1_epi8(-1);
-            let a = _mm_loadu_si128(c.as_ptr().cast::<__m128i>());
-            let b = _mm_loadu_si128(c.as_ptr().add(16).cast::<__m128i>());
-            let lo = _mm_movemask_epi8(_mm_cmpeq_epi8(a, ff)) as u32 & 0xffff;
-            let hi = _mm_movemask_epi8(_mm_cmpeq_epi8(b, ff)) as u32 & 0xffff;
-            lo | hi << 16
-        }
-    }
-    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
-    {
-        let mut bits = 0u32;
-        for (j, &v) in c.iter().enumerate() {
-            bits |= ((v == EDGE) as u32) << j;
-        }
-        bits
-    }
-}
-
 dispatch! {
     /// Appends to `out` the corners `[x, y]` of the window's row `y` with x in
     /// `x0..x1` (raster order), where `mrow` (if any) is non-zero. Needs
@@ -266,7 +238,7 @@ dispatch! {
         let mut skip = 0; // pixels at the start of this chunk done by the one before
         loop {
             // SAFETY: xs >= x0 >= 7 and xs + 32 <= x1, x1 + 7 <= w, asserted above
-            let mut bits = edge_bits(unsafe { win.bytes(xs, 0) });
+            let mut bits = eq_bits(unsafe { win.bytes(xs, 0) }, EDGE);
             if let Some(m) = mrow {
                 for (j, &v) in m[xs..xs + CHUNK].iter().enumerate() {
                     bits &= !(((v == 0) as u32) << j);
