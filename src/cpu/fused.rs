@@ -456,12 +456,15 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
                 for_each_eq(out, WEAK, |x| weak.push((x as u32, y as u32)));
                 ring.rotate_left(1);
             }
+            // hysteresis within the band while it is in cache; the seams follow
+            hysteresis::flood_band(out, w, y0 as u32, &weak);
             weak
         })
         .collect();
 
-    // 5. hysteresis in place, band by band; E is the ruled plane afterwards
-    hysteresis::flood_edges_banded(ruled, &weak, band_rows);
+    // 5. hysteresis across the bands' seams (each band flooded itself in 4);
+    //    E is the ruled plane afterwards
+    hysteresis::flood_seams(ruled, &weak, band_rows);
     std::mem::swap(ruled, edges);
     debug_assert!(edges.data.iter().all(|&v| v == 0 || v == EDGE));
 }

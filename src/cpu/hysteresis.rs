@@ -6,6 +6,7 @@
 //! fills over their WEAK components, which gives the same set.
 
 use super::classify::{EDGE, STRONG, WEAK};
+use super::simd::for_each_eq;
 use crate::image::Plane;
 
 /// The edge map E (255 = edge, 0 = background) from the classes after
@@ -50,7 +51,10 @@ pub fn flood_in_place(e: &mut Plane<u8>, weak: &[usize]) {
 /// component is promoted whole or not at all, so a piece left WEAK that should
 /// be promoted touches a promoted pixel across a band edge). The WEAK pixels
 /// left after that are cleared through the lists, not by a pass over the plane.
-pub(crate) fn flood_edges_banded(e: &mut Plane<u8>, weak: &[Vec<(u32, u32)>], band_rows: usize) {
+/// The fused path runs the two steps itself (the band floods inside its band
+/// tasks); this composition is what the tests check against the naive sweep.
+#[cfg(test)]
+fn flood_edges_banded(e: &mut Plane<u8>, weak: &[Vec<(u32, u32)>], band_rows: usize) {
     use rayon::prelude::*;
     debug_assert!(!e.data.contains(&STRONG));
     let w = e.width as usize;
@@ -58,15 +62,27 @@ pub(crate) fn flood_edges_banded(e: &mut Plane<u8>, weak: &[Vec<(u32, u32)>], ba
         return;
     }
     e.data.par_chunks_mut(band_rows * w).zip(weak).enumerate().for_each(|(b, (band, weak))| {
-        let y0 = (b * band_rows) as u32;
-        flood(band, w, weak.iter().map(|&(x, y)| (x, y - y0)));
+        flood_band(band, w, (b * band_rows) as u32, weak);
     });
-    let h = e.height as usize;
+    flood_seams(e, weak, band_rows);
+}
+
+/// The first step of [`flood_edges_banded`] for one band: `band` holds rows
+/// `y0..` of the plane (`w` wide), `weak` its WEAK pixels (x, y), y counted in the plane.
+pub(crate) fn flood_band(band: &mut [u8], w: usize, y0: u32, weak: &[(u32, u32)]) {
+    flood(band, w, weak.iter().map(|&(x, y)| (x, y - y0)));
+}
+
+/// The last step of [`flood_edges_banded`], after [`flood_band`] on every band.
+pub(crate) fn flood_seams(e: &mut Plane<u8>, weak: &[Vec<(u32, u32)>], band_rows: usize) {
+    let (w, h) = (e.width as usize, e.height as usize);
+    if w == 0 {
+        return;
+    }
     let mut seams = Vec::new();
     for y0 in (band_rows..h).step_by(band_rows) {
         for y in [y0 - 1, y0] {
-            let row = &e.data[y * w..(y + 1) * w];
-            seams.extend(row.iter().enumerate().filter(|&(_, &v)| v == WEAK).map(|(x, _)| (x as u32, y as u32)));
+            for_each_eq(&e.data[y * w..(y + 1) * w], WEAK, |x| seams.push((x as u32, y as u32)));
         }
     }
     flood(&mut e.data, w, seams.into_iter());
