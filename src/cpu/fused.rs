@@ -1,16 +1,18 @@
 //! The fast path of SPEC 1-7 that detection uses: the same function as the
-//! staged modules (median -> ... -> hysteresis), computed in three row-parallel
-//! passes and one flood with vectorisable row kernels instead of nine full-image
-//! stages (docs/algorithm.md, "The fast path", says why each rewrite is exact).
+//! staged modules (median -> ... -> hysteresis), computed in two row-parallel
+//! passes, a small serial step between them and a serial seam flood, with
+//! vectorisable row kernels instead of nine full-image stages
+//! (docs/algorithm.md, "The fast path", says why each rewrite is exact).
 //! `tests` and the golden files check that it is bit-identical to [`edge_map`](super::edge_map).
 //!
-//! 1. median rows -> D
-//! 2. per cell row: LSD gradient rows -> S, direction sector, M8 + cell histograms
+//! 1. + 2. per cell row: median rows -> D (plus the next band's first row,
+//!    recomputed), then LSD gradient rows -> S, direction sector, M8 + cell histograms
 //! 3. Otsu and window statistics from the cell histograms (tiny), turned into
 //!    four integer thresholds on S per run of columns: S >= hi is STRONG, >= lo WEAK_STRONG, ...
 //! 4. per band of rows: NMS + classification into a ring of three padded class
-//!    rows, rules rows -> ruled classes and the list of WEAK pixels
-//! 5. hysteresis in place from the WEAK pixels -> E
+//!    rows, rules rows -> ruled classes and the list of WEAK pixels, then
+//!    hysteresis within the band
+//! 5. hysteresis across the bands' seams -> E
 
 use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use super::local_threshold::{BandHistograms, Cells};
@@ -334,10 +336,12 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
     }
     let EdgeScratch { denoised: d, edges, s, sec, thresholds, ruled, cells: layout } = sc;
 
-    // 1. median
+    // 1. + 2. per cell row, one task each: the band's median rows -> D (and
+    //    the first row of the next band, recomputed, for the gradient's y + 1),
+    //    then its gradient rows -> S, the sector and the cell histograms of
+    //    M8. S and the sector in padded rows of w + 2 (see `classify_row`).
     let ratio16 = small_ratio(delta_num, delta_den);
-    d.reshape(img.width(), img.height());
-    d.data.par_chunks_mut(w).enumerate().for_each(|(y, out)| {
+    let median = |y: usize, out: &mut [u8]| {
         let up = img.row(y.saturating_sub(1) as u32);
         let mid = img.row(y as u32);
         let down = img.row((y + 1).min(h - 1) as u32);
@@ -348,35 +352,39 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
         // A border pixel is its own clamped left or right neighbour, |G - G| = 0
         // is never above delta G, so it is never noise.
         (out[0], out[w - 1]) = (mid[0], mid[w - 1]);
-    });
-
-    // 2. gradient, sector, cell histograms of M8, one cell row per task; S and
-    //    the sector in padded rows of w + 2 (see `classify_row`)
+    };
     let ws = w + 2;
     if layout.as_ref().is_none_or(|c| (c.cx.last(), c.cy.last()) != (Some(&img.width()), Some(&img.height()))) {
         *layout = Some(Cells::new(img.width(), img.height()));
     }
     let layout = layout.as_ref().expect("set just above");
+    d.reshape(img.width(), img.height());
     s.resize(ws * h, 0);
     sec.resize(ws * h, 0);
-    let d = &*d;
     let (cx, cy) = (&layout.cx, &layout.cy);
     let cells: Vec<Vec<[u32; 256]>> = bands(s, ws, cy)
         .into_par_iter()
         .zip(bands(sec, ws, cy))
+        .zip(bands(&mut d.data, w, cy))
         .enumerate()
-        .map(|(j, (s_band, sec_band))| {
+        .map(|(j, ((s_band, sec_band), d_band))| {
+            let (y0, y1) = (cy[j] as usize, cy[j + 1] as usize);
+            for (k, out) in d_band.chunks_mut(w).enumerate() {
+                median(y0 + k, out);
+            }
+            let mut next = vec![0u8; w];
+            if y1 < h {
+                median(y1, &mut next);
+            }
+            let d_band = &*d_band;
+            let d_row = |y: usize| if y < y1 { &d_band[(y - y0) * w..(y - y0 + 1) * w] } else { &next[..] };
             let mut band = BandHistograms::new(cx);
             let mut m8 = vec![0u8; w];
             for (k, (s_row, sec_row)) in s_band.chunks_mut(ws).zip(sec_band.chunks_mut(ws)).enumerate() {
-                let y = cy[j] + k as u32;
-                gradient_row(
-                    d.row(y),
-                    d.row((y + 1).min(h as u32 - 1)),
-                    &mut s_row[1..=w],
-                    &mut sec_row[1..=w],
-                    &mut m8,
-                );
+                let y = y0 + k;
+                // y + 1 clamps to the last row
+                let below = if y + 1 < h { d_row(y + 1) } else { d_row(y) };
+                gradient_row(d_row(y), below, &mut s_row[1..=w], &mut sec_row[1..=w], &mut m8);
                 (s_row[0], s_row[w + 1]) = (0, 0);
                 band.add_row(cx, &m8);
             }
