@@ -5,8 +5,9 @@
 //! (docs/algorithm.md, "The fast path", says why each rewrite is exact).
 //! `tests` and the golden files check that it is bit-identical to [`edge_map`](super::edge_map).
 //!
-//! 1. + 2. per cell row: median rows -> D (plus the next band's first row,
-//!    recomputed), then LSD gradient rows -> S, direction sector, M8 + cell histograms
+//! 1. per cell row: median rows -> D (plus the next band's first row,
+//!    recomputed), then
+//! 2. LSD gradient rows -> S, direction sector, M8 + cell histograms
 //! 3. Otsu and window statistics from the cell histograms (tiny), turned into
 //!    four integer thresholds on S per run of columns: S >= hi is STRONG, >= lo WEAK_STRONG, ...
 //! 4. per band of rows: NMS + classification into a ring of three padded class
@@ -336,7 +337,7 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
     }
     let EdgeScratch { denoised: d, edges, s, sec, thresholds, ruled, cells: layout } = sc;
 
-    // 1. + 2. per cell row, one task each: the band's median rows -> D (and
+    // 1. and 2. per cell row, one task each: the band's median rows -> D (and
     //    the first row of the next band, recomputed, for the gradient's y + 1),
     //    then its gradient rows -> S, the sector and the cell histograms of
     //    M8. S and the sector in padded rows of w + 2 (see `classify_row`).
