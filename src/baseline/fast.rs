@@ -74,39 +74,34 @@ fn circle(data: &[u8], centre: usize, pixel: &[isize; N], k: usize) -> i32 {
     i32::from(data[centre.wrapping_add_signed(pixel[k])])
 }
 
-/// OpenCV's `cornerScore<16>` (the scalar form) on the pixel at index `centre`.
+/// OpenCV's `cornerScore<16>` on the pixel at index `centre`.
 ///
-/// With `d[k] = v - circle[k]`, it returns `max(threshold, A, B) - 1`, where `A`
-/// (`B`) is the largest, over the 16 arcs of 9 contiguous circle pixels, of the
-/// smallest `d` (`-d`) on the arc. For a corner at `threshold` this is the
-/// largest threshold at which the pixel is still a corner.
+/// With `d[k] = v - circle[k]`, it returns `max(threshold, A, -B) - 1`, where `A`
+/// (`B`) is the largest (smallest), over the 16 arcs of 9 contiguous circle
+/// pixels, of the smallest (largest) `d` on the arc. For a corner at
+/// `threshold` this is the largest threshold at which the pixel is still a
+/// corner. OpenCV's scalar form skips arcs that cannot raise the running
+/// maximum (data-dependent branches); this computes every arc's minimum and
+/// maximum by doubling windows over 16-bit lanes (`|d| <= 255`), which gives
+/// the same maxima without branches (`tests::corner_score_equals_opencvs_form`).
 fn corner_score(data: &[u8], centre: usize, pixel: &[isize; N], threshold: i32) -> i32 {
     let v = i32::from(data[centre]);
-    let d: [i32; N] = std::array::from_fn(|k| v - circle(data, centre, pixel, k));
-
-    let mut a0 = threshold;
-    for k in (0..16).step_by(2) {
-        let mut a = d[k + 1].min(d[k + 2]).min(d[k + 3]);
-        if a <= a0 {
-            continue;
-        }
-        a = a.min(d[k + 4]).min(d[k + 5]).min(d[k + 6]).min(d[k + 7]).min(d[k + 8]);
-        a0 = a0.max(a.min(d[k]));
-        a0 = a0.max(a.min(d[k + 9]));
+    let c: [i16; 16] = std::array::from_fn(|k| (v - circle(data, centre, pixel, k)) as i16);
+    // the circle twice, so that every arc is a contiguous window
+    let d: [i16; 32] = std::array::from_fn(|k| c[k % 16]);
+    // smallest / largest over windows of 2, 4, 8, then 9 pixels starting at k
+    let lo2: [i16; 31] = std::array::from_fn(|k| d[k].min(d[k + 1]));
+    let hi2: [i16; 31] = std::array::from_fn(|k| d[k].max(d[k + 1]));
+    let lo4: [i16; 29] = std::array::from_fn(|k| lo2[k].min(lo2[k + 2]));
+    let hi4: [i16; 29] = std::array::from_fn(|k| hi2[k].max(hi2[k + 2]));
+    let lo8: [i16; 25] = std::array::from_fn(|k| lo4[k].min(lo4[k + 4]));
+    let hi8: [i16; 25] = std::array::from_fn(|k| hi4[k].max(hi4[k + 4]));
+    let (mut a, mut b) = (i16::MIN, i16::MAX);
+    for k in 0..16 {
+        a = a.max(lo8[k].min(d[k + 8]));
+        b = b.min(hi8[k].max(d[k + 8]));
     }
-
-    let mut b0 = -a0;
-    for k in (0..16).step_by(2) {
-        let mut b = d[k + 1].max(d[k + 2]).max(d[k + 3]).max(d[k + 4]).max(d[k + 5]);
-        if b >= b0 {
-            continue;
-        }
-        b = b.max(d[k + 6]).max(d[k + 7]).max(d[k + 8]);
-        b0 = b0.min(b.max(d[k]));
-        b0 = b0.min(b.max(d[k + 9]));
-    }
-
-    -b0 - 1
+    threshold.max(i32::from(a)).max(-i32::from(b)) - 1
 }
 
 /// The cyclic run count of `FAST_t`: true iff more than [`K`] consecutive
@@ -329,6 +324,53 @@ pub fn fast_score(image: &Plane<u8>, x: u32, y: u32, threshold: i32) -> i32 {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// OpenCV's `cornerScore<16>` in its scalar form, as the reference.
+    ///
+    /// With `d[k] = v - circle[k]`, it returns `max(threshold, A, B) - 1`, where `A`
+    /// (`B`) is the largest, over the 16 arcs of 9 contiguous circle pixels, of the
+    /// smallest `d` (`-d`) on the arc. For a corner at `threshold` this is the
+    /// largest threshold at which the pixel is still a corner.
+    fn corner_score_opencv(data: &[u8], centre: usize, pixel: &[isize; N], threshold: i32) -> i32 {
+        let v = i32::from(data[centre]);
+        let d: [i32; N] = std::array::from_fn(|k| v - circle(data, centre, pixel, k));
+
+        let mut a0 = threshold;
+        for k in (0..16).step_by(2) {
+            let mut a = d[k + 1].min(d[k + 2]).min(d[k + 3]);
+            if a <= a0 {
+                continue;
+            }
+            a = a.min(d[k + 4]).min(d[k + 5]).min(d[k + 6]).min(d[k + 7]).min(d[k + 8]);
+            a0 = a0.max(a.min(d[k]));
+            a0 = a0.max(a.min(d[k + 9]));
+        }
+
+        let mut b0 = -a0;
+        for k in (0..16).step_by(2) {
+            let mut b = d[k + 1].max(d[k + 2]).max(d[k + 3]).max(d[k + 4]).max(d[k + 5]);
+            if b >= b0 {
+                continue;
+            }
+            b = b.max(d[k + 6]).max(d[k + 7]).max(d[k + 8]);
+            b0 = b0.min(b.max(d[k]));
+            b0 = b0.min(b.max(d[k + 9]));
+        }
+
+        -b0 - 1
+    }
+
+    proptest! {
+        #[test]
+        fn corner_score_equals_opencvs_form(patch in proptest::collection::vec(any::<u8>(), 49), threshold in 0i32..256,
+                                            spread in 0u8..4) {
+            // a 7x7 patch: the circle around its centre (24); `spread` narrows
+            // values towards the centre so that ties and small d occur
+            let patch: Vec<u8> = patch.iter().map(|&v| if spread == 0 { v } else { 128u8.wrapping_add(v >> (4 + spread)) }).collect();
+            let pixel = make_offsets(7);
+            prop_assert_eq!(corner_score(&patch, 24, &pixel, threshold), corner_score_opencv(&patch, 24, &pixel, threshold));
+        }
+    }
 
     fn plane(width: u32, height: u32, data: Vec<u8>) -> Plane<u8> {
         Plane { width, height, data }
