@@ -71,9 +71,11 @@ fn small_ratio(num: u32, den: u32) -> Option<(u16, u16)> {
 
 /// Interior of one median row (x in 1..w-1): flags noise pixels,
 /// `den * |g - n| > num * g` for all four neighbours, in lanes of `T`, and
-/// writes the 3x3 median where flagged, `mid` elsewhere. Every pixel's median
-/// is computed (branch-free, 32 lanes of u8 min/max) because a lane-parallel
-/// network costs less than one scalar median per flagged pixel.
+/// writes the 3x3 median where flagged, `mid` elsewhere. Per chunk of 32
+/// pixels the flags come first; a chunk with any flag computes every pixel's
+/// median (branch-free, 32 lanes of u8 min/max) and selects, which costs less
+/// than one scalar median per flagged pixel; a chunk without is a copy. The
+/// last chunk overlaps its predecessor (recomputing writes equal values).
 #[inline(always)]
 fn median_interior<T>(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], num: T, den: T)
 where
@@ -81,15 +83,17 @@ where
 {
     let w = mid.len();
     let (up, down, out) = (&up[..w], &down[..w], &mut out[..w]);
-    for x in 1..w - 1 {
-        let g = T::from(mid[x]);
+    let flag = |u: u8, l: u8, c: u8, r: u8, d: u8| {
+        let g = T::from(c);
         let lim = num * g;
-        let d = |n: u8| {
+        let far = |n: u8| {
             let n = T::from(n);
             den * (g.max(n) - g.min(n)) > lim
         };
-        let flag = d(up[x]) & d(down[x]) & d(mid[x - 1]) & d(mid[x + 1]);
-        let m = median::median9([
+        far(u) & far(d) & far(l) & far(r)
+    };
+    let med = |x: usize| {
+        median::median9([
             up[x - 1],
             up[x],
             up[x + 1],
@@ -99,8 +103,35 @@ where
             down[x - 1],
             down[x],
             down[x + 1],
-        ]);
-        out[x] = if flag { m } else { mid[x] };
+        ])
+    };
+    if w < CHUNK + 2 {
+        for x in 1..w - 1 {
+            out[x] = if flag(up[x], mid[x - 1], mid[x], mid[x + 1], down[x]) { med(x) } else { mid[x] };
+        }
+        return;
+    }
+    let mut next = 1;
+    loop {
+        let x0 = next.min(w - 1 - CHUNK);
+        let (u, d) = (chunk(up, x0), chunk(down, x0));
+        let (l, c, r) = (chunk(mid, x0 - 1), chunk(mid, x0), chunk(mid, x0 + 1));
+        let flags: [bool; CHUNK] = std::array::from_fn(|t| flag(u[t], l[t], c[t], r[t], d[t]));
+        let o: &mut [u8; CHUNK] = (&mut out[x0..x0 + CHUNK]).try_into().expect("CHUNK bytes");
+        if flags.iter().fold(false, |a, &f| a | f) {
+            let [ul, ur, dl, dr] =
+                [(up, x0 - 1), (up, x0 + 1), (down, x0 - 1), (down, x0 + 1)].map(|(r, x)| chunk(r, x));
+            for t in 0..CHUNK {
+                let m = median::median9([ul[t], u[t], ur[t], l[t], c[t], r[t], dl[t], d[t], dr[t]]);
+                o[t] = if flags[t] { m } else { c[t] };
+            }
+        } else {
+            *o = *c;
+        }
+        if x0 + CHUNK == w - 1 {
+            break;
+        }
+        next = x0 + CHUNK;
     }
 }
 
