@@ -592,3 +592,32 @@ fn edge_image_equals_the_staged_edge_map() {
         assert_eq!(det.edge_image(img.view()).unwrap(), det.edges(img.view()).unwrap().edges, "{name}");
     }
 }
+
+#[test]
+fn edge_image_into_reuses_its_plane_and_keeps_it_on_errors() {
+    let det = lfast::cpu::CpuDetector::new(lfast::Config::default()).unwrap();
+    let mut out = lfast::Plane::default();
+    // one plane through images of different sizes, each result equal to edge_image's
+    for name in ["camera_cc0_v0.18plus.png", "coins.png", "camera_cc0_v0.18plus.png"] {
+        let img = lfast::image::load_gray(common::data(name)).unwrap();
+        det.edge_image_into(img.view(), &mut out).unwrap();
+        assert_eq!(out, det.edge_image(img.view()).unwrap(), "{name}");
+    }
+    // a strided view (row padding) reads in place, with the same result as its dense copy
+    let img = lfast::image::load_gray(common::data("coins.png")).unwrap();
+    let (w, h) = (img.width, img.height);
+    let stride = w as usize + 13;
+    let mut padded = vec![7u8; stride * h as usize];
+    for y in 0..h as usize {
+        padded[y * stride..y * stride + w as usize].copy_from_slice(img.row(y as u32));
+    }
+    let view = lfast::GrayView::new(w, h, stride, &padded).unwrap();
+    det.edge_image_into(view, &mut out).unwrap();
+    assert_eq!(out, det.edge_image(img.view()).unwrap());
+    // bad input: an error naming the problem, and `out` as it was
+    let before = out.clone();
+    let bad = lfast::Plane { width: 10, height: 10, data: vec![0u8; 5] };
+    let e = det.edge_image_into(bad.view(), &mut out).unwrap_err();
+    assert!(matches!(e, lfast::Error::InvalidImage { .. }), "{e:?}");
+    assert_eq!(out, before);
+}
