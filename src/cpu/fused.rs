@@ -22,6 +22,9 @@ use super::{hysteresis, median};
 use crate::image::{GrayView, Plane};
 use rayon::prelude::*;
 
+#[cfg(target_arch = "x86_64")]
+mod gradient_x86;
+
 /// D and E of one image.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct FastEdges {
@@ -150,12 +153,26 @@ dispatch! {
     }
 }
 
+/// One gradient row from D rows y and y+1 (clamped by the caller): S, the
+/// sector code and M8 of each column. With AVX2 the columns before the last
+/// few come from [`gradient_x86::gradient_cols`], the rest from [`gradient_tail`].
+fn gradient_row(r0: &[u8], r1: &[u8], s: &mut [u32], sec: &mut [u8], m8: &mut [u8]) {
+    #[allow(unused_mut)]
+    let mut done = 0;
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above.
+        done = unsafe { gradient_x86::gradient_cols(r0, r1, s, sec, m8) };
+    }
+    gradient_tail(r0, r1, s, sec, m8, done);
+}
+
 dispatch! {
-    /// One gradient row from D rows y and y+1 (clamped by the caller).
-    fn gradient_row(r0: &[u8], r1: &[u8], s: &mut [u32], sec: &mut [u8], m8: &mut [u8]) {
+    /// Columns `from..w` of [`gradient_row`] (the whole row from 0: the scalar reference).
+    fn gradient_tail(r0: &[u8], r1: &[u8], s: &mut [u32], sec: &mut [u8], m8: &mut [u8], from: usize) {
         let w = r0.len();
         let (r1, s, sec, m8) = (&r1[..w], &mut s[..w], &mut sec[..w], &mut m8[..w]);
-        for x in 0..w - 1 {
+        for x in from..w - 1 {
             let (a, b, c, e) = (r0[x] as i32, r0[x + 1] as i32, r1[x] as i32, r1[x + 1] as i32);
             let dx = b + e - a - c;
             let dy = c + e - a - b;
@@ -542,6 +559,52 @@ mod tests {
                     let want =
                         if median::is_noise(&img, x, 1, num, den) { median::median3x3(&img, x, 1) } else { x as u8 };
                     assert_eq!(o32[x as usize], want, "{num}/{den} n={n} x={x}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn gradient_row_vector_equals_scalar() {
+        // rows with every extreme (0 and 255 next to each other) and random bytes,
+        // widths around the 16-pixel steps
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut byte = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            match seed >> 61 {
+                0 => 0,
+                1 => 255,
+                _ => (seed >> 40) as u8,
+            }
+        };
+        for w in (1..=70).chain([255, 256, 257, 1241]) {
+            for _ in 0..20 {
+                let (r0, r1): (Vec<u8>, Vec<u8>) = (0..w).map(|_| (byte(), byte())).unzip();
+                let (mut s, mut sec, mut m8) = (vec![0; w], vec![0; w], vec![0; w]);
+                let (mut s2, mut sec2, mut m82) = (vec![1; w], vec![9; w], vec![7; w]);
+                gradient_row(&r0, &r1, &mut s, &mut sec, &mut m8);
+                gradient_tail(&r0, &r1, &mut s2, &mut sec2, &mut m82, 0);
+                assert_eq!((&s, &sec, &m8), (&s2, &sec2, &m82), "w {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn gradient_row_vector_equals_scalar_for_every_gradient() {
+        // pixel 2k of these rows sees (a, b, c, e) = (a, b, c, k): with a in {0, 255}
+        // and b, c, k over all bytes, e - a and b - c take every value in -255..=255,
+        // so (dx, dy) = (e - a + b - c, e - a - b + c) takes every value there is
+        let w = 2 * 256 + 1;
+        let (mut s, mut sec, mut m8) = (vec![0; w], vec![0; w], vec![0; w]);
+        let (mut s2, mut sec2, mut m82) = (vec![0; w], vec![0; w], vec![0; w]);
+        for a in [0u8, 255] {
+            for b in 0..=255u8 {
+                for c in 0..=255u8 {
+                    let r0: Vec<u8> = (0..w).map(|x| if x % 2 == 0 { a } else { b }).collect();
+                    let r1: Vec<u8> = (0..w).map(|x| if x % 2 == 0 { c } else { (x / 2) as u8 }).collect();
+                    gradient_row(&r0, &r1, &mut s, &mut sec, &mut m8);
+                    gradient_tail(&r0, &r1, &mut s2, &mut sec2, &mut m82, 0);
+                    assert!(s == s2 && sec == sec2 && m8 == m82, "a {a} b {b} c {c}");
                 }
             }
         }
