@@ -95,6 +95,7 @@ fn empty_images_are_invalid_image_errors_on_every_entry_point() {
         assert!(is_invalid_image(c.detect_and_compute(v, None)), "{w}x{h}");
         assert!(is_invalid_image(c.detect(v, None)), "{w}x{h}");
         assert!(is_invalid_image(c.edge_image(v)), "{w}x{h}");
+        assert!(is_invalid_image(c.edge_image_into(v, &mut Plane::default())), "{w}x{h}");
         assert!(is_invalid_image(c.edges(v)), "{w}x{h}");
         assert!(is_invalid_image(c.compute(v, &[])), "{w}x{h}");
         for d in [&auto, &on_cpu] {
