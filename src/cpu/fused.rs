@@ -17,7 +17,7 @@
 
 use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use super::local_threshold::{BandHistograms, Cells};
-use super::simd::{CHUNK, chunk, dispatch, for_each_eq};
+use super::simd::{CHUNK, chunk, chunk_starts, dispatch, for_each_eq};
 use super::{hysteresis, median};
 use crate::image::{GrayView, Plane};
 use rayon::prelude::*;
@@ -77,8 +77,7 @@ fn small_ratio(num: u32, den: u32) -> Option<(u16, u16)> {
 /// writes the 3x3 median where flagged, `mid` elsewhere. Per chunk of 32
 /// pixels the flags come first; a chunk with any flag computes every pixel's
 /// median (branch-free, 32 lanes of u8 min/max) and selects, which costs less
-/// than one scalar median per flagged pixel; a chunk without is a copy. The
-/// last chunk overlaps its predecessor (recomputing writes equal values).
+/// than one scalar median per flagged pixel; a chunk without is a copy.
 #[inline(always)]
 fn median_interior<T>(up: &[u8], mid: &[u8], down: &[u8], out: &mut [u8], num: T, den: T)
 where
@@ -114,9 +113,7 @@ where
         }
         return;
     }
-    let mut next = 1;
-    loop {
-        let x0 = next.min(w - 1 - CHUNK);
+    for x0 in chunk_starts(1, w - 1) {
         let (u, d) = (chunk(up, x0), chunk(down, x0));
         let (l, c, r) = (chunk(mid, x0 - 1), chunk(mid, x0), chunk(mid, x0 + 1));
         let flags: [bool; CHUNK] = std::array::from_fn(|t| flag(u[t], l[t], c[t], r[t], d[t]));
@@ -131,10 +128,6 @@ where
         } else {
             *o = *c;
         }
-        if x0 + CHUNK == w - 1 {
-            break;
-        }
-        next = x0 + CHUNK;
     }
 }
 
@@ -236,11 +229,7 @@ dispatch! {
                 }
                 continue;
             }
-            // chunks from x0; the last one ends at x1, overlapping its
-            // predecessor (recomputing a pixel writes the same class)
-            let mut next = x0;
-            loop {
-                let t0 = next.min(x1 - CHUNK);
+            for t0 in chunk_starts(x0, x1) {
                 let sc_ = chunk(sc, t0);
                 let o: &mut [u8; CHUNK] = (&mut out[t0..t0 + CHUNK]).try_into().expect("CHUNK bytes");
                 // Most pixels lie below every threshold: such a chunk is all NONE.
@@ -254,10 +243,6 @@ dispatch! {
                 } else {
                     *o = [NONE; CHUNK];
                 }
-                if t0 + CHUNK == x1 {
-                    break;
-                }
-                next = t0 + CHUNK;
             }
         }
     }
@@ -285,7 +270,7 @@ dispatch! {
     /// Rules 1 and 2 on one row, from padded class rows of `w + 2` (zeros
     /// outside the image: NONE is neither WEAK_STRONG nor WEAK_WEAK, so the
     /// borders need no special case) into `out` (`w`). STRONG is written as
-    /// EDGE, which it becomes in hysteresis anyway (see `flood_edges`).
+    /// EDGE, which it becomes in hysteresis anyway (see `hysteresis::flood_seams`).
     fn rules_row(cu: &[u8], c: &[u8], cd: &[u8], out: &mut [u8]) {
         let w = out.len();
         let (cu, c, cd) = (&cu[..w + 2], &c[..w + 2], &cd[..w + 2]);

@@ -189,6 +189,21 @@ mod tests {
         Plane::from_vec(classes.width, classes.height, e).unwrap()
     }
 
+    /// [`flood_edges_banded`] on `classes` as the fused path hands them over:
+    /// STRONG already EDGE, the WEAK pixels `weak` (linear indices, in this
+    /// order) as (x, y) per band of `band_rows` rows.
+    fn banded(classes: &Plane<u8>, weak: &[usize], band_rows: usize) -> Plane<u8> {
+        let mut f = classes.clone();
+        f.data.iter_mut().filter(|v| **v == STRONG).for_each(|v| *v = EDGE);
+        let w = classes.width as usize;
+        let mut bands = vec![Vec::new(); (classes.height as usize).div_ceil(band_rows)];
+        for &i in weak {
+            bands[i / w / band_rows].push(((i % w) as u32, (i / w) as u32));
+        }
+        flood_edges_banded(&mut f, &bands, band_rows);
+        f
+    }
+
     #[test]
     fn long_snake_converges() {
         // A serpentine WEAK path with the STRONG seed at its far end: the number
@@ -210,16 +225,9 @@ mod tests {
         assert_eq!(e.data.iter().filter(|&&v| v == EDGE).count(), n_path);
         assert_eq!(e, naive(&c));
         // banded: the path crosses every band edge, the seed is in the last band
+        let weak: Vec<usize> = (0..c.data.len()).filter(|&i| c.data[i] == WEAK).collect();
         for band_rows in [1, 2, 3, 4, 9] {
-            let mut f = c.clone();
-            f.data.iter_mut().filter(|v| **v == STRONG).for_each(|v| *v = EDGE);
-            let mut bands = vec![Vec::new(); (h as usize).div_ceil(band_rows)];
-            for (i, _) in c.data.iter().enumerate().filter(|&(_, &v)| v == WEAK) {
-                let (x, y) = (i as u32 % w, i as u32 / w);
-                bands[y as usize / band_rows].push((x, y));
-            }
-            flood_edges_banded(&mut f, &bands, band_rows);
-            assert_eq!(f, e, "band_rows {band_rows}");
+            assert_eq!(banded(&c, &weak, band_rows), e, "band_rows {band_rows}");
         }
     }
 
@@ -245,16 +253,7 @@ mod tests {
             flood_in_place(&mut e, &weak);
             proptest::prop_assert_eq!(&e, &naive(&c));
             // the fused path's variant: STRONG already EDGE, weak as (x, y) per band
-            let band_rows = 1 + (seed % 5) as usize;
-            let mut f = c.clone();
-            f.data.iter_mut().filter(|v| **v == STRONG).for_each(|v| *v = EDGE);
-            let mut bands = vec![Vec::new(); (h as usize).div_ceil(band_rows)];
-            for &i in &weak {
-                let (x, y) = (i as u32 % w, i as u32 / w);
-                bands[y as usize / band_rows].push((x, y));
-            }
-            flood_edges_banded(&mut f, &bands, band_rows);
-            proptest::prop_assert_eq!(f, e);
+            proptest::prop_assert_eq!(banded(&c, &weak, 1 + (seed % 5) as usize), e);
         }
     }
 }

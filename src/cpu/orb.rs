@@ -18,7 +18,7 @@ pub fn describe(smoothed: &Plane<u8>, x: u32, y: u32, table: &[Pair]) -> Descrip
     if x >= REACH && y >= REACH && x + REACH < w && y + REACH < h {
         // every sample is inside: read by linear offset, no clamping
         #[cfg(target_arch = "x86_64")]
-        if let Ok(t) = <&[Pair; 256]>::try_from(&table[..table.len().min(256)]) {
+        if let Some(t) = table.first_chunk::<256>() {
             // the gathers read 4 bytes from each sample: 3 more columns to the right
             let reach_ok = t.as_flattened().iter().fold(true, |ok, &v| ok & (v.unsigned_abs() <= REACH as u8));
             if x + REACH + 3 < w && reach_ok && std::is_x86_feature_detected!("avx2") {

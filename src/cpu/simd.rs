@@ -35,6 +35,34 @@ pub(crate) fn chunk<T>(r: &[T], t0: usize) -> &[T; CHUNK] {
     r[t0..t0 + CHUNK].try_into().expect("CHUNK elements")
 }
 
+/// Starts of the CHUNK-wide windows that cover `x0..x1` (`x1 - x0 >= CHUNK`):
+/// every CHUNK from `x0`, and a last one ending at `x1` that overlaps its
+/// predecessor (kernels whose output depends only on their input rewrite the
+/// same values there).
+#[inline]
+pub(crate) fn chunk_starts(x0: usize, x1: usize) -> ChunkStarts {
+    debug_assert!(x1 >= x0 + CHUNK, "chunk_starts: {x0}..{x1} is narrower than a chunk");
+    ChunkStarts { next: Some(x0), last: x1 - CHUNK }
+}
+
+/// The iterator of [`chunk_starts`] (one compare per step, cheaper in the row
+/// kernels than a chained `step_by`).
+pub(crate) struct ChunkStarts {
+    next: Option<usize>,
+    last: usize,
+}
+
+impl Iterator for ChunkStarts {
+    type Item = usize;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<usize> {
+        let t = self.next?.min(self.last);
+        self.next = (t < self.last).then_some(t + CHUNK);
+        Some(t)
+    }
+}
+
 /// Bit j set where `c[j] == value`: two 16-byte compares and movemasks
 /// (SSE2, every x86-64 has it), or a plain loop elsewhere.
 #[inline(always)]
@@ -86,6 +114,15 @@ pub(crate) fn for_each_eq(v: &[u8], value: u8, mut f: impl FnMut(usize)) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn chunk_starts_cover_the_range_and_end_at_its_end() {
+        for (x0, x1) in [(0, 32), (1, 33), (0, 64), (5, 70), (3, 100)] {
+            let starts: Vec<usize> = chunk_starts(x0, x1).collect();
+            assert_eq!((starts[0], *starts.last().unwrap() + CHUNK), (x0, x1));
+            assert!(starts.windows(2).all(|p| p[0] < p[1] && p[1] <= p[0] + CHUNK), "{starts:?}");
+        }
+    }
 
     #[test]
     fn eq_bits_and_for_each_eq_find_every_match() {
