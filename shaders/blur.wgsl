@@ -2,7 +2,8 @@
 // smoothing the levels before description. Mirrors src/cpu/blur.rs
 // (`gaussian_blur_into`, `blur_any`): a horizontal pass to Q8 sums in
 // `blur_tmp` (< 2^16, as the CPU's u16), then a vertical pass to Q16, rounded.
-// All levels per dispatch (over the tile list).
+// All levels per dispatch (over the tile list): the horizontal pass walks
+// rows of tiles, the vertical one columns (shaders/common.wgsl).
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/blur.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> gray: array<u32>;
@@ -23,48 +24,62 @@ fn reflect101(i: i32, len: i32) -> i32 {
     return j;
 }
 
-@compute @workgroup_size(16, 16, 1)
+// reflect101, cheap inside [0, len).
+fn reflected(i: i32, len: i32) -> u32 {
+    if (i >= 0 && i < len) { return u32(i); }
+    return u32(reflect101(i, len));
+}
+
+// The seven taps of ORB_KERNEL over v0..v6.
+fn taps(v0: u32, v1: u32, v2: u32, v3: u32, v4: u32, v5: u32, v6: u32) -> u32 {
+    return ORB_KERNEL[0] * v0 + ORB_KERNEL[1] * v1 + ORB_KERNEL[2] * v2 + ORB_KERNEL[3] * v3
+        + ORB_KERNEL[4] * v4 + ORB_KERNEL[5] * v5 + ORB_KERNEL[6] * v6;
+}
+
+// A row pass (tile_row_segment): each invocation walks one row of a tile,
+// the seven taps in registers (one read per pixel instead of seven).
+@compute @workgroup_size(64, 1, 1)
 fn horizontal(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
+    let id = tile_row_segment(wg, li);
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let w = i32(lw(l));
     let row = loff(l) + id.y * lw(l);
-    let x = i32(id.x);
-    var acc = 0u;
-    if (x >= R && x + R < w) {
-        // interior: no reflection (the modulo of reflect101 is costly on GPUs)
-        let c = row + id.x;
-        for (var k = 0u; k < 7u; k++) {
-            acc += ORB_KERNEL[k] * gray[c + k - 3u];
-        }
-    } else {
-        for (var k = 0; k < 7; k++) {
-            acc += ORB_KERNEL[k] * gray[row + u32(reflect101(x + k - R, w))];
-        }
+    let x0 = i32(id.x);
+    var v0 = gray[row + reflected(x0 - 3, w)];
+    var v1 = gray[row + reflected(x0 - 2, w)];
+    var v2 = gray[row + reflected(x0 - 1, w)];
+    var v3 = gray[row + u32(x0)];
+    var v4 = gray[row + reflected(x0 + 1, w)];
+    var v5 = gray[row + reflected(x0 + 2, w)];
+    let end = min(x0 + i32(TILE), w);
+    for (var x = x0; x < end; x++) {
+        let v6 = gray[row + reflected(x + 3, w)];
+        blur_tmp[row + u32(x)] = taps(v0, v1, v2, v3, v4, v5, v6);
+        v0 = v1; v1 = v2; v2 = v3; v3 = v4; v4 = v5; v5 = v6;
     }
-    blur_tmp[row + id.x] = acc;
 }
 
-@compute @workgroup_size(16, 16, 1)
+// A column pass (tile_column): each invocation walks one column of a tile.
+@compute @workgroup_size(64, 1, 1)
 fn vertical(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
+    let id = tile_column(wg, li);
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let h = i32(lh(l));
-    let y = i32(id.y);
-    var acc = 0u;
-    if (y >= R && y + R < h) {
-        // interior: no reflection
-        let top = loff(l) + (id.y - 3u) * lw(l) + id.x;
-        for (var k = 0u; k < 7u; k++) {
-            acc += ORB_KERNEL[k] * blur_tmp[top + k * lw(l)];
-        }
-    } else {
-        for (var k = 0; k < 7; k++) {
-            let yy = u32(reflect101(y + k - R, h));
-            acc += ORB_KERNEL[k] * blur_tmp[loff(l) + yy * lw(l) + id.x];
-        }
+    let w = lw(l);
+    let col = loff(l) + id.x;
+    let y0 = i32(id.y);
+    var v0 = blur_tmp[col + reflected(y0 - 3, h) * w];
+    var v1 = blur_tmp[col + reflected(y0 - 2, h) * w];
+    var v2 = blur_tmp[col + reflected(y0 - 1, h) * w];
+    var v3 = blur_tmp[col + u32(y0) * w];
+    var v4 = blur_tmp[col + reflected(y0 + 1, h) * w];
+    var v5 = blur_tmp[col + reflected(y0 + 2, h) * w];
+    let end = min(y0 + i32(TILE), h);
+    for (var y = y0; y < end; y++) {
+        let v6 = blur_tmp[col + reflected(y + 3, h) * w];
+        smoothed[col + u32(y) * w] = (taps(v0, v1, v2, v3, v4, v5, v6) + (1u << 15u)) >> 16u;
+        v0 = v1; v1 = v2; v2 = v3; v3 = v4; v4 = v5; v5 = v6;
     }
-    smoothed[loff(l) + id.y * lw(l) + id.x] = (acc + (1u << 15u)) >> 16u;
 }

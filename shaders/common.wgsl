@@ -5,6 +5,8 @@
 // [levels[l].z, levels[l].z + w*h) in row-major order, one u32 per pixel.
 
 const MAX_LEVELS: u32 = 32u;
+// Side of the square tiles of per-pixel passes (TILE in src/gpu/layout.rs).
+const TILE: u32 = 16u;
 
 struct Params {
     // w, h, pixel offset of the level in the atlas, index of its first window
@@ -57,17 +59,41 @@ fn quota(l: u32) -> u32 { return P.quotas[l / 4u][l % 4u]; }
 
 // Per-pixel passes are dispatched over the list of the 16x16 tiles of every
 // level (FrameLayout::pixel_groups), so no workgroup falls outside its level.
-// Returns (x, y, level) of this invocation; x is 0xffffffff (outside every
-// level) for the padding workgroups of the last row, which is uniform per workgroup.
-fn tile_pixel(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
-    let t = wg.x + wg.y * P.tile_row;
+// (x0, y0, level) of tile t's top-left pixel; x0 is 0xffffffff (outside every
+// level) for t past the last tile (the padding workgroups of the last row).
+fn tile_origin(t: u32) -> vec3<u32> {
     if (t >= P.total_tiles) { return vec3<u32>(0xffffffffu, 0xffffffffu, 0u); }
     var l = 0u;
     for (var k = 1u; k < P.n_levels; k++) {
         if (t >= P.tiles[k].x) { l = k; }
     }
     let r = t - P.tiles[l].x;
-    return vec3<u32>((r % P.tiles[l].y) * 16u + li.x, (r / P.tiles[l].y) * 16u + li.y, l);
+    return vec3<u32>((r % P.tiles[l].y) * TILE, (r / P.tiles[l].y) * TILE, l);
+}
+
+// (x, y, level) of this invocation of a 16x16 workgroup, one per tile;
+// uniform per workgroup when outside every level.
+fn tile_pixel(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
+    let o = tile_origin(wg.x + wg.y * P.tile_row);
+    return vec3<u32>(o.x + li.x, o.y + li.y, o.z);
+}
+
+// Column passes (workgroup_size(64, 1, 1), FrameLayout::column_groups): a
+// workgroup serves COLUMN_TILES consecutive tiles of the list, one invocation
+// per column of a tile, and each invocation walks its column's TILE rows with
+// its stencil in registers, so a pixel is read once per row of the stencil
+// instead of once per tap. Returns (x, top row, level) of this invocation.
+const COLUMN_TILES: u32 = 4u;
+fn tile_column(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
+    let o = tile_origin((wg.x + wg.y * P.tile_row) * COLUMN_TILES + li.x / TILE);
+    return vec3<u32>(o.x + li.x % TILE, o.y, o.z);
+}
+
+// Row passes: as column passes, with one invocation per row of a tile that
+// walks the row's TILE pixels. Returns (left column, y, level) of this invocation.
+fn tile_row_segment(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
+    let o = tile_origin((wg.x + wg.y * P.tile_row) * COLUMN_TILES + li.x / TILE);
+    return vec3<u32>(o.x, o.y + li.x % TILE, o.z);
 }
 
 // One keypoint: GpuKeypoint in src/gpu/buffers.rs, 12 words (48 bytes).

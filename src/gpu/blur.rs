@@ -41,7 +41,7 @@ impl Pass for BlurPass {
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.horizontal.dispatch(pass, bound, b.layout.pixel_groups());
-        self.vertical.dispatch(pass, bound, b.layout.pixel_groups());
+        self.horizontal.dispatch(pass, bound, b.layout.column_groups());
+        self.vertical.dispatch(pass, bound, b.layout.column_groups());
     }
 }

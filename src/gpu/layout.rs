@@ -11,8 +11,10 @@ pub const MAX_LEVELS: usize = 32;
 pub use crate::spec::windows::MAX_WINDOWS_PER_AXIS;
 /// Most workgroups per row of the tile list (WebGPU's guaranteed per-dimension limit).
 pub const TILE_ROW: u32 = 65535;
-/// Side of the 2D workgroups of per-pixel passes.
+/// Side of the 2D workgroups of per-pixel passes (`TILE` in shaders/common.wgsl).
 pub const TILE: u32 = 16;
+/// Tiles per workgroup of a column pass (`COLUMN_TILES` in shaders/common.wgsl).
+pub const COLUMN_TILES: u32 = 4;
 
 /// The uniform every pass binds at 0. Field for field as in shaders/common.wgsl.
 #[repr(C)]
@@ -181,6 +183,15 @@ impl FrameLayout {
     /// (shaders/common.wgsl `tile_pixel` maps a workgroup to its tile).
     pub fn pixel_groups(&self) -> [u32; 3] {
         let t = self.params.total_tiles;
+        let row = self.params.tile_row.max(1);
+        if t <= row { [t, 1, 1] } else { [row, t.div_ceil(row), 1] }
+    }
+
+    /// Workgroups of a column pass over all levels at once: [`COLUMN_TILES`]
+    /// tiles of the tile list per 64-invocation workgroup (shaders/common.wgsl
+    /// `tile_column`), in rows of at most `tile_row` workgroups.
+    pub fn column_groups(&self) -> [u32; 3] {
+        let t = self.params.total_tiles.div_ceil(COLUMN_TILES);
         let row = self.params.tile_row.max(1);
         if t <= row { [t, 1, 1] } else { [row, t.div_ceil(row), 1] }
     }
