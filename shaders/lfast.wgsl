@@ -1,8 +1,8 @@
 // SPEC 8: the L-FAST corner test on the edge map (paper 3.2, Steps 1-5).
 // Mirrors src/cpu/lfast.rs. `edges` (+ `mask` when P.use_mask == 1) ->
 // `cand` (1 = candidate, 0 otherwise; every pixel of every level is written).
-// One invocation per pixel, all levels in one dispatch (over the tile list); the
-// test itself runs on the tile's compacted edge pixels (see main).
+// A column pass, all levels in one dispatch (over the tile list); the test
+// itself runs on the workgroup's compacted edge pixels (see main).
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/lfast.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> edges: array<u32>;
@@ -108,47 +108,45 @@ fn is_corner(l: u32, px: i32, py: i32) -> bool {
     return true;
 }
 
-// Work-efficient within the tile: the tile's tested edge pixels are first
-// compacted into `todo` (workgroup memory), then the first invocations run the
-// corner test on them, so the test runs in as few SIMD lanes / warps as there
-// are edge pixels instead of diverging across all 256. Results go back through
-// `hit` to the pixel's own invocation, which writes `cand`.
-var<workgroup> todo: array<u32, 256>;
+// Work-efficient: a column pass (tile_column) that lists its four tiles'
+// tested edge pixels in `todo` (workgroup memory) as it walks them, writing 0
+// at every other pixel; after one barrier the workgroup's invocations take the
+// list side by side and write the decisions, so the test runs in as few SIMD
+// lanes / warps as there are edge pixels. An entry is lane << 4 | row.
+var<workgroup> todo: array<u32, 1024>;
+// zero at the start of the workgroup (WGSL zero-initialises workgroup memory)
 var<workgroup> todo_n: atomic<u32>;
-var<workgroup> hit: array<u32, 256>;
 
-@compute @workgroup_size(16, 16, 1)
-fn main(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(local_invocation_id) li: vec3<u32>,
-    @builtin(local_invocation_index) lix: u32,
-) {
-    // A padding workgroup of the tile list: uniform, so the barriers below
-    // are reached by all invocations or none.
-    if (wg.x + wg.y * P.tile_row >= P.total_tiles) { return; }
-    let id = tile_pixel(wg, li);
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_column(wg, li);
     let l = id.z;
     let w = lw(l);
     let h = lh(l);
-    let inside = id.x < w && id.y < h;
-    let i = loff(l) + id.y * w + id.x;
-    if (lix == 0u) { atomicStore(&todo_n, 0u); }
-    hit[lix] = 0u;
-    workgroupBarrier();
-    // Only pixels at least `border` (>= 7) from every side are tested; a
-    // level with w or h <= 2 * border has none. Written this way (no
-    // w - border) so nothing underflows.
-    let b = max(P.border, 7u);
-    let tested = inside && id.x >= b && id.y >= b && id.x + b < w && id.y + b < h;
-    if (tested && edges[i] == EDGE && (P.use_mask == 0u || mask[i] != 0u)) {
-        todo[atomicAdd(&todo_n, 1u)] = lix;
+    // id.x is 0xffffffff past the last tile
+    if (id.x < w) {
+        // Only pixels at least `border` (>= 7) from every side are tested; a
+        // level with w or h <= 2 * border has none. Written this way (no
+        // w - border) so nothing underflows.
+        let b = max(P.border, 7u);
+        let col = id.x >= b && id.x + b < w;
+        let end = min(id.y + TILE, h);
+        for (var y = id.y; y < end; y++) {
+            let i = loff(l) + y * w + id.x;
+            let tested = col && y >= b && y + b < h;
+            if (tested && edges[i] == EDGE && (P.use_mask == 0u || mask[i] != 0u)) {
+                todo[atomicAdd(&todo_n, 1u)] = (li.x << 4u) | (y - id.y);
+            } else {
+                cand[i] = 0u;
+            }
+        }
     }
     workgroupBarrier();
-    if (lix < atomicLoad(&todo_n)) {
-        let t = todo[lix];
-        let origin = id.xy - li.xy;
-        if (is_corner(l, i32(origin.x + t % 16u), i32(origin.y + t / 16u))) { hit[t] = 1u; }
+    let n = atomicLoad(&todo_n);
+    for (var k = li.x; k < n; k += 64u) {
+        let e = todo[k];
+        let p = tile_column(wg, vec3<u32>(e >> 4u, 0u, 0u));
+        let y = p.y + (e & 15u);
+        cand[loff(p.z) + y * lw(p.z) + p.x] = u32(is_corner(p.z, i32(p.x), i32(y)));
     }
-    workgroupBarrier();
-    if (inside) { cand[i] = hit[lix]; }
 }

@@ -1,8 +1,8 @@
 // SPEC 9: Harris corner response on D (7x7 block, 3x3 Sobel, k = 0.04), as
 // OpenCV ORB's HARRIS_SCORE. Mirrors src/cpu/response.rs.
 // `cand` (1 = candidate) + `denoised` -> `resp` (f32 bits) at candidates, 0
-// elsewhere. One invocation per pixel, all levels in one dispatch (over the tile
-// list); the response itself runs on the tile's compacted candidates (see main).
+// elsewhere. A column pass, all levels in one dispatch (over the tile list); the
+// response itself runs on the workgroup's compacted candidates (see main).
 //
 // Bit-identical to the CPU: the structure sums are exact integers, and the
 // final formula (harris_from_sums) is f32 in the CPU's operation order, with
@@ -99,39 +99,40 @@ fn structure_sums(l: u32, x: i32, y: i32) -> vec3<i32> {
     return vec3(a, b, c);
 }
 
-// Work-efficient within the tile: candidates are compacted into `todo`
-// (workgroup memory) and the first invocations compute their responses, so
-// the 9x9 window and the formula run in as few SIMD lanes / warps as there are
-// candidates. Results return through `out` to the pixel's own invocation.
-var<workgroup> todo: array<u32, 256>;
+// Work-efficient: a column pass (tile_column) that lists its four tiles'
+// candidates in `todo` (workgroup memory) as it walks them, writing 0 at every
+// other pixel; after one barrier the workgroup's invocations take the list
+// side by side and write the responses, so the 9x9 window and the formula run
+// in as few SIMD lanes / warps as there are candidates. An entry is
+// lane << 4 | row in the lane's column.
+var<workgroup> todo: array<u32, 1024>;
+// zero at the start of the workgroup (WGSL zero-initialises workgroup memory)
 var<workgroup> todo_n: atomic<u32>;
-var<workgroup> out: array<u32, 256>;
 
-@compute @workgroup_size(16, 16, 1)
-fn main(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(local_invocation_id) li: vec3<u32>,
-    @builtin(local_invocation_index) lix: u32,
-) {
-    // padding workgroups of the tile list: uniform, before any barrier
-    if (wg.x + wg.y * P.tile_row >= P.total_tiles) { return; }
-    let id = tile_pixel(wg, li);
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_column(wg, li);
     let l = id.z;
-    let inside = id.x < lw(l) && id.y < lh(l);
-    let i = loff(l) + id.y * lw(l) + id.x;
-    if (lix == 0u) { atomicStore(&todo_n, 0u); }
-    out[lix] = 0u;
-    workgroupBarrier();
-    if (inside && cand[i] != 0u) {
-        todo[atomicAdd(&todo_n, 1u)] = lix;
+    let w = lw(l);
+    // id.x is 0xffffffff past the last tile
+    if (id.x < w) {
+        let end = min(id.y + TILE, lh(l));
+        for (var y = id.y; y < end; y++) {
+            let i = loff(l) + y * w + id.x;
+            if (cand[i] != 0u) {
+                todo[atomicAdd(&todo_n, 1u)] = (li.x << 4u) | (y - id.y);
+            } else {
+                resp[i] = 0u;
+            }
+        }
     }
     workgroupBarrier();
-    if (lix < atomicLoad(&todo_n)) {
-        let t = todo[lix];
-        let origin = id.xy - li.xy;
-        let s = structure_sums(l, i32(origin.x + t % 16u), i32(origin.y + t / 16u));
-        out[t] = bitcast<u32>(harris_from_sums(s.x, s.y, s.z));
+    let n = atomicLoad(&todo_n);
+    for (var k = li.x; k < n; k += 64u) {
+        let e = todo[k];
+        let p = tile_column(wg, vec3<u32>(e >> 4u, 0u, 0u));
+        let y = p.y + (e & 15u);
+        let s = structure_sums(p.z, i32(p.x), i32(y));
+        resp[loff(p.z) + y * lw(p.z) + p.x] = bitcast<u32>(harris_from_sums(s.x, s.y, s.z));
     }
-    workgroupBarrier();
-    if (inside) { resp[i] = out[lix]; }
 }

@@ -18,5 +18,5 @@ simple_pass! {
         "denoised" = denoised,
         "resp" = resp,
     }
-    dispatch |b| Groups::Direct(b.layout.pixel_groups())
+    dispatch |b| Groups::Direct(b.layout.column_groups())
 }
