@@ -6,8 +6,8 @@
 // same set comes from connected-component labelling of the active (WEAK or
 // STRONG) pixels with a lock-free union-find (Playne & Hawick, "A New Algorithm for Parallel
 // Connected-Component Labelling on GPUs", 2018): a component is an edge iff it
-// holds a STRONG pixel. Four dispatches, each one invocation per pixel of
-// every level (over the tile list), in this order:
+// holds a STRONG pixel. Four dispatches, each a column pass over every level
+// (one invocation per column of a tile, see tile_column), in this order:
 //   init         labels[i] = i
 //   merge        union of each active pixel with its active left, up-left,
 //                up and up-right neighbours (the other four see it as theirs)
@@ -87,28 +87,26 @@ fn unite(a0: u32, b0: u32) {
     }
 }
 
-// Is invocation id a pixel of its level (z = level)?
-fn inside(id: vec3<u32>) -> bool {
-    return id.x < lw(id.z) && id.y < lh(id.z);
-}
-
 // The atlas index of pixel id.
 fn at(id: vec3<u32>) -> u32 {
     return loff(id.z) + id.y * lw(id.z) + id.x;
 }
 
-@compute @workgroup_size(16, 16, 1)
-fn init(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
-    if (!inside(id)) { return; }
+fn init_px(id: vec3<u32>) {
     let i = at(id);
     atomicStore(&labels[i], i);
 }
 
-@compute @workgroup_size(16, 16, 1)
-fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
-    if (!inside(id)) { return; }
+@compute @workgroup_size(64, 1, 1)
+fn init(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_column(wg, li);
+    // id.x is 0xffffffff past the last tile
+    if (id.x >= lw(id.z)) { return; }
+    let end = min(id.y + TILE, lh(id.z));
+    for (var y = id.y; y < end; y++) { init_px(vec3<u32>(id.x, y, id.z)); }
+}
+
+fn merge_px(id: vec3<u32>) {
     let i = at(id);
     if (!is_active(i)) { return; }
     let w = lw(id.z);
@@ -122,10 +120,16 @@ fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     }
 }
 
-@compute @workgroup_size(16, 16, 1)
-fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
-    if (!inside(id)) { return; }
+@compute @workgroup_size(64, 1, 1)
+fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_column(wg, li);
+    // id.x is 0xffffffff past the last tile
+    if (id.x >= lw(id.z)) { return; }
+    let end = min(id.y + TILE, lh(id.z));
+    for (var y = id.y; y < end; y++) { merge_px(vec3<u32>(id.x, y, id.z)); }
+}
+
+fn compress_px(id: vec3<u32>) {
     let i = at(id);
     if (!is_active(i)) { return; }
     // Roots do not change any more: every store writes a root, an ancestor
@@ -137,12 +141,27 @@ fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) 
     if (ruled[i] == STRONG) { atomicOr(&flags[root], 1u); }
 }
 
-@compute @workgroup_size(16, 16, 1)
-fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
-    if (!inside(id)) { return; }
+@compute @workgroup_size(64, 1, 1)
+fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_column(wg, li);
+    // id.x is 0xffffffff past the last tile
+    if (id.x >= lw(id.z)) { return; }
+    let end = min(id.y + TILE, lh(id.z));
+    for (var y = id.y; y < end; y++) { compress_px(vec3<u32>(id.x, y, id.z)); }
+}
+
+fn final_edges_px(id: vec3<u32>) {
     let i = at(id);
     var e = 0u;
     if (is_active(i) && atomicLoad(&flags[atomicLoad(&labels[i])]) == 1u) { e = EDGE; }
     edges[i] = e;
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_column(wg, li);
+    // id.x is 0xffffffff past the last tile
+    if (id.x >= lw(id.z)) { return; }
+    let end = min(id.y + TILE, lh(id.z));
+    for (var y = id.y; y < end; y++) { final_edges_px(vec3<u32>(id.x, y, id.z)); }
 }

@@ -63,7 +63,7 @@ impl Pass for HysteresisPass {
         // wgpu orders the dispatches of one compute pass (each sees the
         // storage writes of the previous one).
         for (k, g) in self.kernels.iter().zip(&bound.groups) {
-            k.dispatch(pass, g, b.layout.pixel_groups());
+            k.dispatch(pass, g, b.layout.column_groups());
         }
     }
 
