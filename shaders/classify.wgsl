@@ -1,8 +1,8 @@
 // SPEC 6: the double adaptive dual threshold (paper Algorithm 2), as exact
 // rational comparisons. Mirrors src/cpu/classify.rs.
 // m, nms, otsu, windows, grid -> classes (NONE 0, WEAK_WEAK 1, WEAK 2,
-// WEAK_STRONG 3, STRONG 4). One invocation per pixel, all levels in one
-// dispatch (z = level).
+// WEAK_STRONG 3, STRONG 4). A column pass, all levels in one dispatch (over
+// the tile list).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/classify.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> m: array<u32>;
@@ -38,22 +38,27 @@ fn class_of(mv: u32, t1: u32, v3: u32, alpha_pct: u32) -> u32 {
     return NONE;
 }
 
-@compute @workgroup_size(16, 16, 1)
+// A column pass (tile_column): the window column of x is looked up once.
+@compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
+    let id = tile_column(wg, li);
     let l = id.z;
-    if (id.x >= lw(l) || id.y >= lh(l)) { return; }
-    let p = loff(l) + id.y * lw(l) + id.x;
+    // id.x is 0xffffffff past the last tile
+    if (id.x >= lw(l)) { return; }
     // otsu[l] == 0: the level has no edges (t1 = None on the CPU).
     let t1 = otsu[l];
-    var c = NONE;
-    if (t1 != 0u && nms[p] != 0u) {
-        // WindowGrid::v3_at: the grid holds xs (nx), ys (ny), col_window (w), row_window (h).
-        let g = P.grids[l];
-        let i = grid[g.z + g.x + g.y + id.x];
-        let j = grid[g.z + g.x + g.y + lw(l) + id.y];
-        let v3 = windows[(P.levels[l].w + j * g.x + i) * 4u + 3u];
-        c = class_of(m[p], t1, v3, P.alpha_pct);
+    // WindowGrid::v3_at: the grid holds xs (nx), ys (ny), col_window (w), row_window (h).
+    let g = P.grids[l];
+    let i = grid[g.z + g.x + g.y + id.x];
+    let end = min(id.y + TILE, lh(l));
+    for (var y = id.y; y < end; y++) {
+        let p = loff(l) + y * lw(l) + id.x;
+        var c = NONE;
+        if (t1 != 0u && nms[p] != 0u) {
+            let j = grid[g.z + g.x + g.y + lw(l) + y];
+            let v3 = windows[(P.levels[l].w + j * g.x + i) * 4u + 3u];
+            c = class_of(m[p], t1, v3, P.alpha_pct);
+        }
+        classes[p] = c;
     }
-    classes[p] = c;
 }

@@ -1,6 +1,6 @@
 // SPEC 2: LSD 2x2 gradient (paper Eq. 2) in integers. Mirrors src/cpu/gradient.rs.
 // denoised -> gx (gx2 as i32), gy (gy2 as i32), s (S = gx2^2 + gy2^2), m (M = isqrt(S) >> 1).
-// One invocation per pixel, all levels in one dispatch (over the tile list).
+// A column pass, all levels in one dispatch (over the tile list).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/gradient.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> denoised: array<u32>;
@@ -31,24 +31,37 @@ fn isqrt(v: u32) -> u32 {
 // `magnitude` in src/cpu/gradient.rs.
 fn magnitude(sq: u32) -> u32 { return isqrt(sq) >> 1u; }
 
-@compute @workgroup_size(16, 16, 1)
+// A column pass (tile_column): rows y and y + 1 of columns x and x + 1 walk
+// down in registers (two reads per pixel instead of four). Right and bottom
+// reads clamp (x, y themselves are inside).
+@compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
+    let id = tile_column(wg, li);
     let l = id.z;
-    if (id.x >= lw(l) || id.y >= lh(l)) { return; }
-    let x = i32(id.x);
-    let y = i32(id.y);
-    // Right and bottom reads clamp (`clamped` never moves x, y themselves).
-    let a = i32(denoised[clamped(l, x, y)]);          // (x, y)
-    let b = i32(denoised[clamped(l, x + 1, y)]);      // (x+1, y)
-    let c = i32(denoised[clamped(l, x, y + 1)]);      // (x, y+1)
-    let e = i32(denoised[clamped(l, x + 1, y + 1)]);  // (x+1, y+1)
-    let dx = b + e - a - c;
-    let dy = c + e - a - b;
-    let sq = u32(dx * dx + dy * dy);
-    let i = loff(l) + id.y * lw(l) + id.x;
-    gx[i] = dx;
-    gy[i] = dy;
-    s[i] = sq;
-    m[i] = magnitude(sq);
+    // id.x is 0xffffffff past the last tile
+    if (id.x >= lw(l)) { return; }
+    let w = lw(l);
+    let h = lh(l);
+    let x = id.x;
+    let xr = min(x + 1u, w - 1u);
+    var row = loff(l) + id.y * w;
+    var a = i32(denoised[row + x]);   // (x, y)
+    var b = i32(denoised[row + xr]);  // (x+1, y)
+    let end = min(id.y + TILE, h);
+    for (var y = id.y; y < end; y++) {
+        let below = loff(l) + min(y + 1u, h - 1u) * w;
+        let c = i32(denoised[below + x]);   // (x, y+1)
+        let e = i32(denoised[below + xr]);  // (x+1, y+1)
+        let dx = b + e - a - c;
+        let dy = c + e - a - b;
+        let sq = u32(dx * dx + dy * dy);
+        let i = row + x;
+        gx[i] = dx;
+        gy[i] = dy;
+        s[i] = sq;
+        m[i] = magnitude(sq);
+        a = c;
+        b = e;
+        row += w;
+    }
 }

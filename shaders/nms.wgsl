@@ -1,7 +1,7 @@
 // SPEC 3: non-maximum suppression across the gradient direction, with the
 // direction sector found by integer tests. Mirrors src/cpu/nms.rs.
-// gx, gy, s -> nms (1 = survivor, 0 otherwise). One invocation per pixel,
-// all levels in one dispatch (over the tile list).
+// gx, gy, s -> nms (1 = survivor, 0 otherwise). A column pass, all levels in
+// one dispatch (over the tile list).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/nms.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> gx: array<i32>;
@@ -31,19 +31,24 @@ fn s_or_zero(l: u32, x: i32, y: i32) -> u32 {
     return s[loff(l) + u32(y) * lw(l) + u32(x)];
 }
 
-@compute @workgroup_size(16, 16, 1)
+// A column pass (tile_column): one invocation per 16 pixels.
+@compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
+    let id = tile_column(wg, li);
     let l = id.z;
-    if (id.x >= lw(l) || id.y >= lh(l)) { return; }
+    // id.x is 0xffffffff past the last tile
+    if (id.x >= lw(l)) { return; }
     let x = i32(id.x);
-    let y = i32(id.y);
-    let i = loff(l) + id.y * lw(l) + id.x;
-    let v = s[i];
-    var keep = 0u;
-    if (v != 0u) {
-        let o = sector(gx[i], gy[i]);
-        keep = select(0u, 1u, v > s_or_zero(l, x + o.x, y + o.y) && v >= s_or_zero(l, x + o.z, y + o.w));
+    let end = min(id.y + TILE, lh(l));
+    for (var yy = id.y; yy < end; yy++) {
+        let y = i32(yy);
+        let i = loff(l) + yy * lw(l) + id.x;
+        let v = s[i];
+        var keep = 0u;
+        if (v != 0u) {
+            let o = sector(gx[i], gy[i]);
+            keep = select(0u, 1u, v > s_or_zero(l, x + o.x, y + o.y) && v >= s_or_zero(l, x + o.z, y + o.w));
+        }
+        nms[i] = keep;
     }
-    nms[i] = keep;
 }

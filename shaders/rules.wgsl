@@ -1,6 +1,6 @@
 // SPEC 7 rules 1 and 2: isolated-edge suppression (paper Algorithm 3).
-// Mirrors src/cpu/rules.rs. `classes` (SPEC 6) -> `ruled`, one invocation per
-// pixel, all levels in one dispatch (over the tile list). Both rules read the classes
+// Mirrors src/cpu/rules.rs. `classes` (SPEC 6) -> `ruled`, a column pass, all
+// levels in one dispatch (over the tile list). Both rules read the classes
 // of SPEC 6 only, so the result does not depend on the order of invocations.
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/rules.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
@@ -14,40 +14,51 @@ const WEAK: u32 = 2u;
 const WEAK_STRONG: u32 = 3u;
 const STRONG: u32 = 4u;
 
-// True iff one of the 8 neighbours of (x, y) inside the level has class `c`.
-// Neighbours outside the level do not exist (no replicate border here).
-fn has_neighbour(l: u32, x: i32, y: i32, c: u32) -> bool {
-    let w = i32(lw(l));
-    let h = i32(lh(l));
-    for (var dy = -1; dy <= 1; dy++) {
-        for (var dx = -1; dx <= 1; dx++) {
-            let nx = x + dx;
-            let ny = y + dy;
-            if ((dx != 0 || dy != 0) && nx >= 0 && ny >= 0 && nx < w && ny < h
-                && classes[loff(l) + u32(ny) * lw(l) + u32(nx)] == c) {
-                return true;
-            }
-        }
-    }
-    return false;
+// The classes of (x-1, x, x+1) on row y of level l; NONE outside the level
+// (no replicate border here: a missing neighbour matches no searched class,
+// as rule_at only looks for WEAK_STRONG and WEAK_WEAK).
+fn row3(l: u32, x: u32, y: i32) -> vec3<u32> {
+    var r = vec3<u32>(NONE);
+    if (y < 0 || y >= i32(lh(l))) { return r; }
+    let i = loff(l) + u32(y) * lw(l) + x;
+    if (x > 0u) { r.x = classes[i - 1u]; }
+    r.y = classes[i];
+    if (x + 1u < lw(l)) { r.z = classes[i + 1u]; }
+    return r;
 }
 
-// The class of (x, y) after rules 1 and 2 (rule_at in the CPU module).
-fn rule_at(l: u32, x: i32, y: i32) -> u32 {
-    let c = classes[loff(l) + u32(y) * lw(l) + u32(x)];
-    if (c == WEAK_STRONG) {
-        return select(WEAK, STRONG, has_neighbour(l, x, y, WEAK_STRONG));
-    }
-    if (c == WEAK_WEAK) {
-        return select(WEAK, NONE, has_neighbour(l, x, y, WEAK_WEAK));
-    }
-    return c;
+// True iff one of the 8 neighbours of the centre of the 3x3 window (a above,
+// b its row, c below) has class `k`.
+fn has_neighbour(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>, k: u32) -> bool {
+    return any(a == vec3<u32>(k)) || b.x == k || b.z == k || any(c == vec3<u32>(k));
 }
 
-@compute @workgroup_size(16, 16, 1)
+// The class of the window's centre after rules 1 and 2 (rule_at in the CPU module).
+fn rule_at(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>) -> u32 {
+    if (b.y == WEAK_STRONG) {
+        return select(WEAK, STRONG, has_neighbour(a, b, c, WEAK_STRONG));
+    }
+    if (b.y == WEAK_WEAK) {
+        return select(WEAK, NONE, has_neighbour(a, b, c, WEAK_WEAK));
+    }
+    return b.y;
+}
+
+// A column pass (tile_column): the 3x3 window walks down in registers.
+@compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
+    let id = tile_column(wg, li);
     let l = id.z;
-    if (id.x >= lw(l) || id.y >= lh(l)) { return; }
-    ruled[loff(l) + id.y * lw(l) + id.x] = rule_at(l, i32(id.x), i32(id.y));
+    // id.x is 0xffffffff past the last tile
+    if (id.x >= lw(l)) { return; }
+    let y0 = i32(id.y);
+    var a = row3(l, id.x, y0 - 1);
+    var b = row3(l, id.x, y0);
+    let end = min(y0 + i32(TILE), i32(lh(l)));
+    for (var y = y0; y < end; y++) {
+        let c = row3(l, id.x, y + 1);
+        ruled[loff(l) + u32(y) * lw(l) + id.x] = rule_at(a, b, c);
+        a = b;
+        b = c;
+    }
 }

@@ -25,5 +25,5 @@ simple_pass! {
         "s" = s,
         "m" = m,
     }
-    dispatch |b| Groups::Direct(b.layout.pixel_groups())
+    dispatch |b| Groups::Direct(b.layout.column_groups())
 }

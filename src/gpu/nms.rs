@@ -18,5 +18,5 @@ simple_pass! {
         "s" = s,
         "nms" = nms,
     }
-    dispatch |b| Groups::Direct(b.layout.pixel_groups())
+    dispatch |b| Groups::Direct(b.layout.column_groups())
 }

@@ -16,5 +16,5 @@ simple_pass! {
         "classes" = classes,
         "ruled" = ruled,
     }
-    dispatch |b| Groups::Direct(b.layout.pixel_groups())
+    dispatch |b| Groups::Direct(b.layout.column_groups())
 }
