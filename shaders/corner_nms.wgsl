@@ -1,7 +1,7 @@
 // SPEC 9: non-maximum suppression among corner candidates. Mirrors
 // src/cpu/corner_nms.rs. `cand` + `resp` -> survivors appended to `corners`
 // (GpuKeypoint, src/gpu/buffers.rs) with counters[CORNERS] as the cursor.
-// One invocation per pixel, all levels in one dispatch (over the tile list). The
+// A column pass, all levels in one dispatch (over the tile list). The
 // append order is nondeterministic; select.wgsl puts the list in SPEC 9 order.
 // Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/corner_nms.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
@@ -19,16 +19,12 @@ fn beats(rq: f32, q: vec2<u32>, rp: f32, p: vec2<u32>) -> bool {
     return rq > rp || (rq == rp && (q.y < p.y || (q.y == p.y && q.x < p.x)));
 }
 
-@compute @workgroup_size(16, 16, 1)
-fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_pixel(wg, li);
-    let l = id.z;
+// Candidate p of level l: appended to `corners`
+// iff no other candidate of its (2r+1)^2 square beats it.
+fn suppress(l: u32, p: vec2<u32>) {
     let w = lw(l);
     let h = lh(l);
-    if (id.x >= w || id.y >= h) { return; }
-    let i = loff(l) + id.y * w + id.x;
-    if (cand[i] == 0u) { return; }
-    let p = id.xy;
+    let i = loff(l) + p.y * w + p.x;
     let rp = bitcast<f32>(resp[i]);
     // The (2r+1)^2 square, cut to the level (outside it there are no candidates).
     let r = P.nms_radius;
@@ -61,4 +57,36 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     k.bin = 0u;
     k.pad = 0u;
     corners[slot] = k;
+}
+
+// Work-efficient: a column pass (tile_column) that lists its four tiles'
+// candidates in `todo` (workgroup memory) as it walks them; after one barrier
+// the workgroup's invocations take the list side by side, so the square scan
+// runs in as few SIMD lanes / warps as there are candidates. An entry is
+// lane << 4 | row in the lane's column.
+var<workgroup> todo: array<u32, 1024>;
+// zero at the start of the workgroup (WGSL zero-initialises workgroup memory)
+var<workgroup> todo_n: atomic<u32>;
+
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let id = tile_column(wg, li);
+    let l = id.z;
+    let w = lw(l);
+    // id.x is 0xffffffff past the last tile
+    if (id.x < w) {
+        let end = min(id.y + TILE, lh(l));
+        for (var y = id.y; y < end; y++) {
+            if (cand[loff(l) + y * w + id.x] != 0u) {
+                todo[atomicAdd(&todo_n, 1u)] = (li.x << 4u) | (y - id.y);
+            }
+        }
+    }
+    workgroupBarrier();
+    let n = atomicLoad(&todo_n);
+    for (var k = li.x; k < n; k += 64u) {
+        let e = todo[k];
+        let p = tile_column(wg, vec3<u32>(e >> 4u, 0u, 0u));
+        suppress(p.z, vec2<u32>(p.x, p.y + (e & 15u)));
+    }
 }

@@ -26,5 +26,5 @@ simple_pass! {
         "corners" = corners,
         "counters" = counters,
     }
-    dispatch |b| Groups::Direct(b.layout.pixel_groups()); clear counters
+    dispatch |b| Groups::Direct(b.layout.column_groups()); clear counters
 }
