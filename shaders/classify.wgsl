@@ -43,7 +43,7 @@ fn class_of(mv: u32, t1: u32, v3: u32, alpha_pct: u32) -> u32 {
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let id = tile_column(wg, li);
     let l = id.z;
-    // id.x is 0xffffffff past the last tile
+    // id.x is NO_TILE past the last tile
     if (id.x >= lw(l)) { return; }
     // otsu[l] == 0: the level has no edges (t1 = None on the CPU).
     let t1 = otsu[l];

@@ -59,10 +59,11 @@ fn quota(l: u32) -> u32 { return P.quotas[l / 4u][l % 4u]; }
 
 // Per-pixel passes are dispatched over the list of the 16x16 tiles of every
 // level (FrameLayout::pixel_groups), so no workgroup falls outside its level.
-// (x0, y0, level) of tile t's top-left pixel; x0 is 0xffffffff (outside every
-// level) for t past the last tile (the padding workgroups of the last row).
+// (x0, y0, level) of tile t's top-left pixel; NO_TILE (outside every level)
+// for t past the last tile (the padding workgroups of the last row).
+const NO_TILE: u32 = 0xffffffffu;
 fn tile_origin(t: u32) -> vec3<u32> {
-    if (t >= P.total_tiles) { return vec3<u32>(0xffffffffu, 0xffffffffu, 0u); }
+    if (t >= P.total_tiles) { return vec3<u32>(NO_TILE, NO_TILE, 0u); }
     var l = 0u;
     for (var k = 1u; k < P.n_levels; k++) {
         if (t >= P.tiles[k].x) { l = k; }
@@ -72,9 +73,10 @@ fn tile_origin(t: u32) -> vec3<u32> {
 }
 
 // (x, y, level) of this invocation of a 16x16 workgroup, one per tile;
-// uniform per workgroup when outside every level.
+// NO_TILE, uniform per workgroup, past the last tile.
 fn tile_pixel(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
     let o = tile_origin(wg.x + wg.y * P.tile_row);
+    if (o.x == NO_TILE) { return o; }
     return vec3<u32>(o.x + li.x, o.y + li.y, o.z);
 }
 
@@ -82,10 +84,12 @@ fn tile_pixel(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
 // workgroup serves COLUMN_TILES consecutive tiles of the list, one invocation
 // per column of a tile, and each invocation walks its column's TILE rows with
 // its stencil in registers, so a pixel is read once per row of the stencil
-// instead of once per tap. Returns (x, top row, level) of this invocation.
+// instead of once per tap. Returns (x, top row, level) of this invocation, or
+// NO_TILE past the last tile.
 const COLUMN_TILES: u32 = 4u;
 fn tile_column(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
     let o = tile_origin((wg.x + wg.y * P.tile_row) * COLUMN_TILES + li.x / TILE);
+    if (o.x == NO_TILE) { return o; }
     return vec3<u32>(o.x + li.x % TILE, o.y, o.z);
 }
 
@@ -93,6 +97,7 @@ fn tile_column(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
 // walks the row's TILE pixels. Returns (left column, y, level) of this invocation.
 fn tile_row_segment(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
     let o = tile_origin((wg.x + wg.y * P.tile_row) * COLUMN_TILES + li.x / TILE);
+    if (o.x == NO_TILE) { return o; }
     return vec3<u32>(o.x, o.y + li.x % TILE, o.z);
 }
 

@@ -38,7 +38,7 @@ fn magnitude(sq: u32) -> u32 { return isqrt(sq) >> 1u; }
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let id = tile_column(wg, li);
     let l = id.z;
-    // id.x is 0xffffffff past the last tile
+    // id.x is NO_TILE past the last tile
     if (id.x >= lw(l)) { return; }
     let w = lw(l);
     let h = lh(l);

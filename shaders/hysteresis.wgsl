@@ -100,7 +100,7 @@ fn init_px(id: vec3<u32>) {
 @compute @workgroup_size(64, 1, 1)
 fn init(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let id = tile_column(wg, li);
-    // id.x is 0xffffffff past the last tile
+    // id.x is NO_TILE past the last tile
     if (id.x >= lw(id.z)) { return; }
     let end = min(id.y + TILE, lh(id.z));
     for (var y = id.y; y < end; y++) { init_px(vec3<u32>(id.x, y, id.z)); }
@@ -123,7 +123,7 @@ fn merge_px(id: vec3<u32>) {
 @compute @workgroup_size(64, 1, 1)
 fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let id = tile_column(wg, li);
-    // id.x is 0xffffffff past the last tile
+    // id.x is NO_TILE past the last tile
     if (id.x >= lw(id.z)) { return; }
     let end = min(id.y + TILE, lh(id.z));
     for (var y = id.y; y < end; y++) { merge_px(vec3<u32>(id.x, y, id.z)); }
@@ -144,7 +144,7 @@ fn compress_px(id: vec3<u32>) {
 @compute @workgroup_size(64, 1, 1)
 fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let id = tile_column(wg, li);
-    // id.x is 0xffffffff past the last tile
+    // id.x is NO_TILE past the last tile
     if (id.x >= lw(id.z)) { return; }
     let end = min(id.y + TILE, lh(id.z));
     for (var y = id.y; y < end; y++) { compress_px(vec3<u32>(id.x, y, id.z)); }
@@ -160,7 +160,7 @@ fn final_edges_px(id: vec3<u32>) {
 @compute @workgroup_size(64, 1, 1)
 fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let id = tile_column(wg, li);
-    // id.x is 0xffffffff past the last tile
+    // id.x is NO_TILE past the last tile
     if (id.x >= lw(id.z)) { return; }
     let end = min(id.y + TILE, lh(id.z));
     for (var y = id.y; y < end; y++) { final_edges_px(vec3<u32>(id.x, y, id.z)); }

@@ -123,7 +123,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let l = id.z;
     let w = lw(l);
     let h = lh(l);
-    // id.x is 0xffffffff past the last tile
+    // id.x is NO_TILE past the last tile
     if (id.x < w) {
         // Only pixels at least `border` (>= 7) from every side are tested; a
         // level with w or h <= 2 * border has none. Written this way (no

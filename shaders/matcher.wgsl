@@ -5,7 +5,7 @@
 //
 // Descriptors are 8 u32 words each (the 32 bytes little-endian). One query
 // (or train, for the backward scan) per invocation; the other set is walked
-// in tiles of TILE descriptors staged in workgroup memory, each invocation of
+// in tiles of MATCH_TILE descriptors staged in workgroup memory, each invocation of
 // the workgroup loading one descriptor of the tile. `P` (the common prelude's
 // uniform) is declared but unused here.
 // Tests: tests/gpu_matcher.rs (this pass alone == src/cpu/matcher.rs); tests/gpu_shaders.rs (naga, bindings).
@@ -21,7 +21,7 @@ struct MatchParams {
     _pad2: u32,
 }
 
-const TILE: u32 = 64u;
+const MATCH_TILE: u32 = 64u;
 const WORDS: u32 = 8u;
 const NO_INDEX: u32 = 0xffffffffu;
 const NO_DISTANCE: u32 = 0xffffffffu;
@@ -36,7 +36,7 @@ const NO_DISTANCE: u32 = 0xffffffffu;
 // per query: train index or NO_INDEX, distance
 @group(0) @binding(6) var<storage, read_write> matches: array<vec2<u32>>;
 
-var<workgroup> tile: array<u32, 512>; // TILE * WORDS
+var<workgroup> tile: array<u32, 512>; // MATCH_TILE * WORDS
 
 fn dist(a: array<u32, 8>, k: u32) -> u32 {
     var d = 0u;
@@ -59,13 +59,13 @@ fn forward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocat
     var d1 = NO_DISTANCE;
     var d2 = NO_DISTANCE;
     // the loop bounds are uniform, so every invocation reaches the barriers
-    for (var base = 0u; base < M.n_train; base += TILE) {
+    for (var base = 0u; base < M.n_train; base += MATCH_TILE) {
         let j = base + li;
         if (j < M.n_train) {
             for (var w = 0u; w < WORDS; w++) { tile[li * WORDS + w] = train[j * WORDS + w]; }
         }
         workgroupBarrier();
-        let count = min(TILE, M.n_train - base);
+        let count = min(MATCH_TILE, M.n_train - base);
         for (var k = 0u; k < count; k++) {
             let d = dist(a, k);
             // strict: an equal distance later in the order never wins
@@ -93,13 +93,13 @@ fn backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoca
     }
     var best = NO_INDEX;
     var d1 = NO_DISTANCE;
-    for (var base = 0u; base < M.n_query; base += TILE) {
+    for (var base = 0u; base < M.n_query; base += MATCH_TILE) {
         let i = base + li;
         if (i < M.n_query) {
             for (var w = 0u; w < WORDS; w++) { tile[li * WORDS + w] = query[i * WORDS + w]; }
         }
         workgroupBarrier();
-        let count = min(TILE, M.n_query - base);
+        let count = min(MATCH_TILE, M.n_query - base);
         for (var k = 0u; k < count; k++) {
             let d = dist(a, k);
             if (d < d1) {

@@ -36,7 +36,7 @@ fn s_or_zero(l: u32, x: i32, y: i32) -> u32 {
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let id = tile_column(wg, li);
     let l = id.z;
-    // id.x is 0xffffffff past the last tile
+    // id.x is NO_TILE past the last tile
     if (id.x >= lw(l)) { return; }
     let x = i32(id.x);
     let end = min(id.y + TILE, lh(l));

@@ -114,7 +114,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let id = tile_column(wg, li);
     let l = id.z;
     let w = lw(l);
-    // id.x is 0xffffffff past the last tile
+    // id.x is NO_TILE past the last tile
     if (id.x < w) {
         let end = min(id.y + TILE, lh(l));
         for (var y = id.y; y < end; y++) {

@@ -49,7 +49,7 @@ fn rule_at(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>) -> u32 {
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let id = tile_column(wg, li);
     let l = id.z;
-    // id.x is 0xffffffff past the last tile
+    // id.x is NO_TILE past the last tile
     if (id.x >= lw(l)) { return; }
     let y0 = i32(id.y);
     var a = row3(l, id.x, y0 - 1);

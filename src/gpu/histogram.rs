@@ -16,5 +16,5 @@ simple_pass! {
         "m" = m,
         "hist" = hist,
     }
-    dispatch |b| Groups::Direct(b.layout.pixel_groups()); clear hist
+    dispatch |b| Groups::Direct(b.layout.column_groups()); clear hist
 }
