@@ -27,29 +27,57 @@ fn tap(d: u32, src_len: u32, dst_len: u32) -> vec2<u32> {
     return vec2(s, w);
 }
 
-@compute @workgroup_size(16, 16, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+// The horizontal blend of source row `row` (an atlas index) at taps sx0, sx1
+// with weight wx (< 2^19).
+fn hblend(row: u32, sx0: u32, sx1: u32, wx: u32) -> u32 {
+    return (ONE - wx) * gray[row + sx0] + wx * gray[row + sx1];
+}
+
+// Dispatched as FrameLayout::level_column_groups: each invocation walks 16
+// rows of one destination column. Its horizontal taps are computed once, and
+// a source row's blend is reused by the next destination row that reads it.
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
     let l = level_index.x;
     if (l == 0u || l >= P.n_levels) { return; }
     let dw = lw(l);
     let dh = lh(l);
-    if (id.x >= dw || id.y >= dh) { return; }
+    let x = id.x;
+    let y0 = wg.y * TILE;
+    if (x >= dw || y0 >= dh) { return; }
     let p = l - 1u;
     let sw = lw(p);
     let sh = lh(p);
-    let tx = tap(id.x, sw, dw);
-    let ty = tap(id.y, sh, dh);
+    let tx = tap(x, sw, dw);
     let sx0 = tx.x;
     let sx1 = min(sx0 + 1u, sw - 1u);
-    let sy0 = ty.x;
-    let sy1 = min(sy0 + 1u, sh - 1u);
-    let r0 = loff(p) + sy0 * sw;
-    let r1 = loff(p) + sy1 * sw;
     let wx = tx.y;
-    let wy = ty.y;
-    // Horizontal taps (< 2^19), then the vertical blend (< 2^30): no overflow.
-    let h0 = (ONE - wx) * gray[r0 + sx0] + wx * gray[r0 + sx1];
-    let h1 = (ONE - wx) * gray[r1 + sx0] + wx * gray[r1 + sx1];
-    let v = (ONE - wy) * h0 + wy * h1;
-    gray[loff(l) + id.y * dw + id.x] = (v + (1u << (2u * COEF_BITS - 1u))) >> (2u * COEF_BITS);
+    // the blends of source rows r0 and r1 of the previous destination row
+    var r0 = 0xffffffffu;
+    var r1 = 0xffffffffu;
+    var h0 = 0u;
+    var h1 = 0u;
+    let end = min(y0 + TILE, dh);
+    for (var y = y0; y < end; y++) {
+        let ty = tap(y, sh, dh);
+        let sy0 = ty.x;
+        let sy1 = min(sy0 + 1u, sh - 1u);
+        // rows only move down: the new upper row is the old lower or upper one, or new
+        if (sy0 == r1) {
+            h0 = h1;
+        } else if (sy0 != r0) {
+            h0 = hblend(loff(p) + sy0 * sw, sx0, sx1, wx);
+        }
+        if (sy1 == sy0) {
+            h1 = h0;
+        } else if (sy1 != r1) {
+            h1 = hblend(loff(p) + sy1 * sw, sx0, sx1, wx);
+        }
+        r0 = sy0;
+        r1 = sy1;
+        let wy = ty.y;
+        // the vertical blend (< 2^30): no overflow
+        let v = (ONE - wy) * h0 + wy * h1;
+        gray[loff(l) + y * dw + x] = (v + (1u << (2u * COEF_BITS - 1u))) >> (2u * COEF_BITS);
+    }
 }

@@ -202,6 +202,13 @@ impl FrameLayout {
         [w.div_ceil(TILE), h.div_ceil(TILE), 1]
     }
 
+    /// Workgroups of a column pass over level `l` alone: 64 columns by
+    /// [`TILE`] rows per 64-invocation workgroup (shaders/pyramid.wgsl).
+    pub fn level_column_groups(&self, l: usize) -> [u32; 3] {
+        let (w, h) = self.sizes[l];
+        [w.div_ceil(64), h.div_ceil(TILE), 1]
+    }
+
     /// Range of level `l` in a per-pixel atlas.
     pub fn level_range(&self, l: usize) -> std::ops::Range<usize> {
         let (w, h) = self.sizes[l];
