@@ -37,8 +37,8 @@ struct Params {
     max_h: u32,
     total_tiles: u32,
     tile_row: u32,      // workgroups per row of the tile list (the device's limit)
-    _pad1: u32,
-    _pad2: u32,
+    cells: u32,         // offset in `grid` of the SPEC 5 cells (FrameLayout::grid_data)
+    _pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> P: Params;

@@ -1,46 +1,72 @@
 // SPEC 5: the sliding-window statistics behind the local thresholds TL1, TL2.
-// Mirrors src/cpu/local_threshold.rs (`stats_of`; the CPU sums per-cell
-// histograms, here each window counts its own pixels: the same histogram).
-// m + grid -> windows[(first window of l + j*nx + i) * 4 + {0: min, 1: max,
-// 2: lower median, 3: V3}] over M8 = min(M, 255).
-// One workgroup per window: workgroup_id = (i, j, level); dispatch
-// (max nx, max ny, n_levels), groups beyond a level's grid return at once.
+// Mirrors src/cpu/local_threshold.rs: the windows' histograms of M8 =
+// min(M, 255) are sums of the histograms of the cells cut at every window
+// edge (spec::cell_cuts), so each pixel is counted once, not once per window
+// holding it. m + grid -> window_hist -> windows[(first window of l + j*nx + i)
+// * 4 + {0: min, 1: max, 2: lower median, 3: V3}]. Two entry points:
+// - cells: one workgroup per cell, workgroup_id = (column, row, level),
+//   dispatch (most cells along x, along y, n_levels); it counts the cell in
+//   workgroup memory and adds each bin to every window holding the cell.
+// - stats: one workgroup per window, workgroup_id = (i, j, level), dispatch
+//   (max nx, max ny, n_levels): stats_of over the window's histogram.
+// Groups beyond a level's cells or windows return at once. `window_hist` is
+// cleared by the pass before it runs.
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/local_threshold.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> m: array<u32>;
 @group(0) @binding(2) var<storage, read> grid: array<u32>;
 @group(0) @binding(3) var<storage, read_write> windows: array<u32>;
+@group(0) @binding(4) var<storage, read_write> window_hist: array<atomic<u32>>;
 
+// Zero at the start of a workgroup (WGSL zero-initialises workgroup memory).
 var<workgroup> bins: array<atomic<u32>, 256>;
+// The windows holding the cell: columns [win.x, win.y), rows [win.z, win.w).
+var<workgroup> win: vec4<u32>;
+
+// The windows of origins grid[o..o+n] (size `size`) that hold [c0, c1):
+// origins are sorted and sizes equal, so they are one range.
+fn holding(o: u32, n: u32, size: u32, c0: u32, c1: u32) -> vec2<u32> {
+    var r = vec2<u32>(n, n);
+    for (var k = 0u; k < n; k++) {
+        let s = grid[o + k];
+        if (s <= c0 && c1 <= s + size) {
+            r.y = k + 1u;
+            if (r.x == n) { r.x = k; }
+        }
+    }
+    return r;
+}
 
 @compute @workgroup_size(16, 16, 1)
-fn main(
+fn cells(
     @builtin(local_invocation_id) lid: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
     @builtin(workgroup_id) wg: vec3<u32>,
 ) {
     let l = wg.z;
+    if (l >= P.n_levels) { return; }
+    let hdr = P.cells + 4u * l;
+    let cxo = grid[hdr];
+    let cyo = grid[hdr + 2u];
+    // Workgroup-uniform: the barrier below is reached by all or none.
+    if (wg.x >= grid[hdr + 1u] || wg.y >= grid[hdr + 3u]) { return; }
+    let x0 = grid[cxo + wg.x];
+    let x1 = grid[cxo + wg.x + 1u];
+    let y0 = grid[cyo + wg.y];
+    let y1 = grid[cyo + wg.y + 1u];
     let g = P.grids[l];
-    let nx = g.x;
-    let ny = g.y;
-    let i = wg.x;
-    let j = wg.y;
-    // Workgroup-uniform: the barriers below are reached by all or none.
-    if (l >= P.n_levels || i >= nx || j >= ny) { return; }
-    let a = g.w & 0xffffu;
-    let b = g.w >> 16u;
-    let x0 = grid[g.z + i];       // xs[i]
-    let y0 = grid[g.z + nx + j];  // ys[j]
-
-    atomicStore(&bins[li], 0u);
-    workgroupBarrier();
-    // Rows lid.y, lid.y + 16, ...; columns lid.x, lid.x + 16, ... of the window.
+    if (li == 0u) {
+        let wx = holding(g.z, g.x, g.w & 0xffffu, x0, x1);
+        let wy = holding(g.z + g.x, g.y, g.w >> 16u, y0, y1);
+        win = vec4<u32>(wx, wy);
+    }
+    // Rows lid.y, lid.y + 16, ...; columns lid.x, lid.x + 16, ... of the cell.
     // Runs of equal values (flat regions) are counted locally and added once.
     var run_v = 0u;
     var run_n = 0u;
-    for (var y = lid.y; y < b; y += 16u) {
-        let row = loff(l) + (y0 + y) * lw(l) + x0;
-        for (var x = lid.x; x < a; x += 16u) {
+    for (var y = y0 + lid.y; y < y1; y += 16u) {
+        let row = loff(l) + y * lw(l);
+        for (var x = x0 + lid.x; x < x1; x += 16u) {
             let v = min(m[row + x], 255u);
             if (v != run_v && run_n != 0u) {
                 atomicAdd(&bins[run_v], run_n);
@@ -52,30 +78,66 @@ fn main(
     }
     if (run_n != 0u) { atomicAdd(&bins[run_v], run_n); }
     workgroupBarrier();
-
-    if (li == 0u) {
-        // stats_of in src/cpu/local_threshold.rs: n = a*b > 0 pixels.
-        let n = a * b;
-        var lo = 0u;
-        var found_lo = false;
-        var hi = 0u;
-        for (var v = 0u; v < 256u; v++) {
-            let c = atomicLoad(&bins[v]);
-            if (c > 0u) {
-                if (!found_lo) { lo = v; found_lo = true; }
-                hi = v;
-            }
+    let c = atomicLoad(&bins[li]);
+    if (c == 0u) { return; }
+    let r = win;
+    for (var j = r.z; j < r.w; j++) {
+        for (var i = r.x; i < r.y; i++) {
+            atomicAdd(&window_hist[(P.levels[l].w + j * g.x + i) * 256u + li], c);
         }
+    }
+}
+
+// stats' reductions: 256 - (lowest non-empty bin), 1 + (highest), the sums
+// of the 16 runs of 16 bins.
+var<workgroup> lo_inv: atomic<u32>;
+var<workgroup> hi_1: atomic<u32>;
+var<workgroup> part: array<u32, 16>;
+
+@compute @workgroup_size(256, 1, 1)
+fn stats(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let l = wg.z;
+    let g = P.grids[l];
+    let nx = g.x;
+    let ny = g.y;
+    let i = wg.x;
+    let j = wg.y;
+    // Workgroup-uniform: the barriers below are reached by all or none.
+    if (l >= P.n_levels || i >= nx || j >= ny) { return; }
+    let c = atomicLoad(&window_hist[(P.levels[l].w + j * nx + i) * 256u + li]);
+    atomicStore(&bins[li], c);
+    if (c != 0u) {
+        atomicMax(&lo_inv, 256u - li);
+        atomicMax(&hi_1, li + 1u);
+    }
+    workgroupBarrier();
+    if (li < 16u) {
+        var sum = 0u;
+        for (var k = 0u; k < 16u; k++) { sum += atomicLoad(&bins[li * 16u + k]); }
+        part[li] = sum;
+    }
+    workgroupBarrier();
+    if (li == 0u) {
+        // stats_of in src/cpu/local_threshold.rs over n = a*b > 0 pixels: the
+        // lower median is the first bin where the running count passes
+        // (n - 1) / 2, found run by run, then bin by bin.
+        let n = (g.w & 0xffffu) * (g.w >> 16u);
         let half = (max(n, 1u) - 1u) / 2u;  // `target` on the CPU (a WGSL keyword)
         var acc = 0u;
-        var median = 0u;
-        for (var v = 0u; v < 256u; v++) {
-            acc += atomicLoad(&bins[v]);
-            if (acc > half) {
-                median = v;
-                break;
-            }
+        var run = 0u;
+        while (run < 15u && acc + part[run] <= half) {
+            acc += part[run];
+            run++;
         }
+        // a window holds a*b >= 1 pixels, so the count passes `half` by bin 255
+        var median = run * 16u;
+        loop {
+            acc += atomicLoad(&bins[median]);
+            if (acc > half || median == 255u) { break; }
+            median++;
+        }
+        let lo = 256u - atomicLoad(&lo_inv);
+        let hi = atomicLoad(&hi_1) - 1u;
         let o = (P.levels[l].w + j * nx + i) * 4u;
         windows[o] = lo;
         windows[o + 1u] = hi;

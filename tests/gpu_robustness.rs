@@ -613,28 +613,29 @@ fn small_buffers(bytes: u64) -> wgpu::Limits {
 #[test]
 fn frames_over_small_limits_are_gpu_limits_errors() {
     let Some(_) = t::context() else { return };
-    let ctx = context_with_limits(small_buffers(1 << 20)).unwrap();
+    let ctx = context_with_limits(small_buffers(4 << 20)).unwrap();
     let cfg = Config::default();
     let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
     let cpu = CpuDetector::new(cfg.clone()).unwrap();
-    // 400x300: the 8-level atlas is ~371k pixels = 1.48 MB per buffer > 1 MiB
-    let big = t::test_image(400, 300, 6);
-    let e = gpu.workspace(400, 300).unwrap_err();
+    // 800x600: the 8-level atlas is ~1.48M pixels = 5.9 MB per buffer > 4 MiB
+    // (400x300 fits: 1.48 MB per pixel buffer, 2.4 MB of window histograms)
+    let big = t::test_image(800, 600, 6);
+    let e = gpu.workspace(800, 600).unwrap_err();
     assert!(matches!(e, Error::GpuLimits { .. }), "workspace: {e:?}");
-    eprintln!("400x300 on 1 MiB buffers: {e}");
+    eprintln!("800x600 on 4 MiB buffers: {e}");
     let mut ws = None;
     let e = no_panic(|| gpu.detect_and_compute(&mut ws, big.view(), None)).unwrap().unwrap_err();
     assert!(matches!(e, Error::GpuLimits { .. }), "detect_and_compute: {e:?}");
     let e = no_panic(|| gpu.edge_image(&mut ws, big.view())).unwrap().unwrap_err();
     assert!(matches!(e, Error::GpuLimits { .. }), "edge_image: {e:?}");
     // a frame that fits still works, before and after a refused one
-    let small = t::test_image(200, 150, 6);
+    let small = t::test_image(400, 300, 6);
     let g = gpu.detect_and_compute(&mut ws, small.view(), None).unwrap();
-    assert_same("200x150 on 1 MiB buffers", &g, &cpu.detect_and_compute(small.view(), None).unwrap());
+    assert_same("400x300 on 4 MiB buffers", &g, &cpu.detect_and_compute(small.view(), None).unwrap());
     let e = gpu.detect_and_compute(&mut ws, big.view(), None).unwrap_err();
     assert!(matches!(e, Error::GpuLimits { .. }), "{e:?}");
     let g = gpu.detect_and_compute(&mut ws, small.view(), None).unwrap();
-    assert_same("200x150 after a refused frame", &g, &cpu.detect_and_compute(small.view(), None).unwrap());
+    assert_same("400x300 after a refused frame", &g, &cpu.detect_and_compute(small.view(), None).unwrap());
     // the front door on this device reports it too (from_context = Backend::Gpu)
     let det = Detector::from_context(ctx.clone(), cfg).unwrap();
     let e = det.detect_and_compute(big.view(), None).unwrap_err();

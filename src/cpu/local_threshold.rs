@@ -7,7 +7,7 @@
 //! histogram is the sum of its cells'. Min, max and lower median come from it.
 
 use crate::image::Plane;
-pub use crate::spec::windows::{WindowLayout, nearest_windows, window_origins};
+pub use crate::spec::windows::{WindowLayout, cell_cuts, nearest_windows, window_origins};
 use rayon::prelude::*;
 
 /// Min, max and lower median of `M8` in one window.
@@ -63,14 +63,6 @@ fn stats_of(h: &[u32; 256]) -> WindowStats {
     WindowStats { min, max, median }
 }
 
-/// Cut points of one axis: 0, `len`, and every window's two edges, sorted.
-fn cuts(origins: &[u32], size: u32, len: u32) -> Vec<u32> {
-    let mut c: Vec<u32> = origins.iter().flat_map(|&o| [o, o + size]).chain([0, len]).collect();
-    c.sort_unstable();
-    c.dedup();
-    c
-}
-
 /// The window layout of a `w x h` image cut into cells at every window edge.
 #[derive(Clone, Debug)]
 pub(crate) struct Cells {
@@ -83,8 +75,8 @@ pub(crate) struct Cells {
 impl Cells {
     pub fn new(w: u32, h: u32) -> Self {
         let windows = WindowLayout::new(w, h);
-        let cx = cuts(&windows.xs, windows.a, w);
-        let cy = cuts(&windows.ys, windows.b, h);
+        let cx = cell_cuts(&windows.xs, windows.a, w);
+        let cy = cell_cuts(&windows.ys, windows.b, h);
         Self { windows, cx, cy }
     }
 

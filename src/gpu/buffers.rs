@@ -85,6 +85,9 @@ pub struct Allocated {
     pub keypoints: u64,
     /// Windows.
     pub windows: u64,
+    /// Bins of the window histograms: 256 per window, for as many windows as
+    /// `windows` (a smaller frame may have more windows).
+    pub window_bins: u64,
     /// Words of the grid buffer.
     pub grid: u64,
     /// Bytes of the input buffer.
@@ -105,7 +108,11 @@ impl Allocated {
             px: layout.total_px_exact,
             keypoints: layout.capacity as u64,
             windows: levels * per_level,
-            grid: sides + levels * 2 * MAX_WINDOWS_PER_AXIS as u64,
+            window_bins: 256 * levels * per_level,
+            // xs, ys, then per level a cell header and at most 2 cuts per window and 2 more per axis
+            grid: sides
+                + levels * 2 * MAX_WINDOWS_PER_AXIS as u64
+                + levels * (4 + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 2)),
             input: (w as u64 * h as u64).next_multiple_of(4),
             levels: layout.n_levels() as u64,
         }
@@ -116,6 +123,7 @@ impl Allocated {
         self.px >= other.px
             && self.keypoints >= other.keypoints
             && self.windows >= other.windows
+            && self.window_bins >= other.window_bins
             && self.grid >= other.grid
             && self.input >= other.input
             && self.levels >= other.levels
@@ -160,6 +168,8 @@ pub struct Buffers {
     pub grid: wgpu::Buffer,
     /// Per window min, max, median, V3.
     pub windows: wgpu::Buffer,
+    /// Per window a 256-bin histogram of M8, summed from its cells (SPEC 5).
+    pub window_hist: wgpu::Buffer,
     /// SPEC 6 classes.
     pub classes: wgpu::Buffer,
     /// Classes after rules 1 and 2.
@@ -216,7 +226,7 @@ impl Buffers {
         }
         let px_bytes = layout.total_px as u64 * 4;
         let kp_bytes = layout.capacity as u64 * KP_WORDS * 4;
-        let largest = px_bytes.max(kp_bytes);
+        let largest = px_bytes.max(kp_bytes).max(4 * allocated.window_bins);
         let max_binding = limits.max_storage_buffer_binding_size;
         if largest > max_binding || largest > limits.max_buffer_size {
             return Err(Error::GpuLimits {
@@ -290,6 +300,7 @@ impl Buffers {
             otsu: buf("otsu", 4 * n_levels),
             grid: init("grid", bytemuck::cast_slice(&grid), storage),
             windows: buf("windows", 16 * allocated.windows),
+            window_hist: buf("window_hist", 4 * allocated.window_bins),
             classes: px("classes"),
             ruled: px("ruled"),
             labels: px("labels"),

@@ -3,7 +3,7 @@
 //! that carries it all to the shaders (mirrors shaders/common.wgsl).
 
 use crate::config::{Config, DELTA_DEN, Mode};
-use crate::spec::{WindowLayout, level_quotas};
+use crate::spec::{WindowLayout, cell_cuts, level_quotas};
 use bytemuck::{Pod, Zeroable};
 
 /// Most pyramid levels the shaders handle (as `Config::validate` allows).
@@ -67,8 +67,10 @@ pub struct Params {
     /// Workgroups per row of the tile list: the device's per-dimension limit
     /// (at most [`TILE_ROW`]); set by `Buffers::new`.
     pub tile_row: u32,
+    /// Word offset in the grid buffer of the SPEC 5 cells (see [`FrameLayout::grid_data`]).
+    pub cells: u32,
     /// Padding to 16 bytes.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 
 /// The layout of one frame size under one config.
@@ -88,8 +90,13 @@ pub struct FrameLayout {
     pub window_offsets: Vec<u32>,
     /// Windows of all levels.
     pub total_windows: u32,
-    /// The grid buffer: per level `xs, ys, col_window, row_window`.
+    /// The grid buffer: per level `xs, ys, col_window, row_window`; then, from
+    /// `params.cells`, per level the header `[offset of cx, cells along x,
+    /// offset of cy, cells along y]` and after the headers each level's cell
+    /// cuts `cx`, `cy` ([`cell_cuts`]).
     pub grid_data: Vec<u32>,
+    /// Most cells of any level along x and y.
+    pub max_cells: (u32, u32),
     /// Keypoint slots: an upper bound on corners surviving corner NMS, so
     /// the list can never overflow (survivors are >= r+1 apart, see docs/algorithm.md).
     pub capacity: u32,
@@ -137,6 +144,24 @@ impl FrameLayout {
             }
         }
         let capacity = capacity.clamp(1, u32::MAX as u64 / 64) as u32;
+        // The cells: per level a header (offset of the x cuts, cells along x,
+        // offset of the y cuts, cells along y), then each level's cuts.
+        p.cells = grid_data.len() as u32;
+        let cells_data = 4 * grids.len();
+        grid_data.resize(grid_data.len() + cells_data, 0);
+        let mut max_cells = (0, 0);
+        for (l, (g, &(w, h))) in grids.iter().zip(&sizes).enumerate() {
+            let (cx, cy) = (cell_cuts(&g.xs, g.a, w), cell_cuts(&g.ys, g.b, h));
+            let (ncx, ncy) = (cx.len() as u32 - 1, cy.len() as u32 - 1);
+            max_cells = (ncx.max(max_cells.0), ncy.max(max_cells.1));
+            let hdr = p.cells as usize + 4 * l;
+            grid_data[hdr] = grid_data.len() as u32;
+            grid_data[hdr + 1] = ncx;
+            grid_data.extend_from_slice(&cx);
+            grid_data[hdr + 2] = grid_data.len() as u32;
+            grid_data[hdr + 3] = ncy;
+            grid_data.extend_from_slice(&cy);
+        }
         for (l, q) in level_quotas(cfg.n_features, &sizes).into_iter().enumerate() {
             p.quotas[l / 4][l % 4] = q;
         }
@@ -168,6 +193,7 @@ impl FrameLayout {
             window_offsets,
             total_windows,
             grid_data,
+            max_cells,
             capacity,
             params: p,
         }

@@ -25,4 +25,4 @@ pub mod windows;
 pub use keypoint::{LFAST_CENTRE, OPENCV_CENTRE, keypoint_at, keypoint_level_pixel, level_pixel};
 pub use mask::{level_mask, mask_radius};
 pub use quotas::level_quotas;
-pub use windows::{WindowLayout, nearest_windows, window_origins};
+pub use windows::{WindowLayout, cell_cuts, nearest_windows, window_origins};

@@ -57,6 +57,24 @@ impl WindowLayout {
     }
 }
 
+/// Cell boundaries along one axis of length `len`: 0, `len` and both edges
+/// of every window (origins `origins`, size `size`), sorted, without repeats.
+/// Every window is the union of the cells between two of them, so window
+/// statistics can be summed from per-cell histograms (the CPU's
+/// `local_threshold` and shaders/local_threshold.wgsl both do).
+///
+/// ```
+/// let xs = lfast::spec::window_origins(1241, 248);
+/// let c = lfast::spec::cell_cuts(&xs, 248, 1241);
+/// assert_eq!(c, vec![0, 124, 248, 372, 496, 620, 744, 868, 992, 993, 1116, 1240, 1241]);
+/// ```
+pub fn cell_cuts(origins: &[u32], size: u32, len: u32) -> Vec<u32> {
+    let mut c: Vec<u32> = origins.iter().flat_map(|&o| [o, o + size]).chain([0, len]).collect();
+    c.sort_unstable();
+    c.dedup();
+    c
+}
+
 /// Window origins along one axis of length `len` for window size `size`:
 /// `0, stride, 2*stride, ...` while the window fits, then one flush with the end.
 ///
