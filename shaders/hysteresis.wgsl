@@ -6,26 +6,32 @@
 // same set comes from connected-component labelling of the active (WEAK or
 // STRONG) pixels with a lock-free union-find (Playne & Hawick, "A New Algorithm for Parallel
 // Connected-Component Labelling on GPUs", 2018): a component is an edge iff it
-// holds a STRONG pixel. Four dispatches, each a column pass over every level
-// (one invocation per column of a tile, see tile_column), in this order:
-//   init         labels[i] = i
+// holds a STRONG pixel.
+//
+// `labels` holds each pixel's parent p as its complement ~p, so the buffer as
+// cleared by the pass's prepare (all 0) says "no parent": every pixel starts
+// as a root, without an init dispatch. Below, "labels[i]" means the parent
+// ~labels[i], with NONE (= ~0) ordered above every index. Three dispatches,
+// each a column pass over every level (one invocation per column of a tile,
+// see tile_column), in this order:
 //   merge        union of each active pixel with its active left, up-left,
 //                up and up-right neighbours (the other four see it as theirs)
 //   compress     labels[i] = root of i, and flags[root] = 1 for every STRONG
 //                pixel (`flags` is cleared by the pass's prepare)
 //   final_edges  edges = 255 iff active and flags[labels[i]] == 1
 // No host loop and no iteration cap: the result is exact after one pass of
-// each, whatever the length or shape of a contour.
+// each, whatever the length or shape of a contour. Through the complement,
+// atomicMin of a parent is atomicMax of its stored word.
 //
 // Why it converges and is exact:
 // - Labels only decrease and always point to a smaller or equal index:
-//   init sets labels[i] = i, and the only other writes are
-//   atomicMin(labels[hi], lo) with lo < hi and (compress) labels[i] = root,
-//   root <= i. So every parent chain strictly decreases until a root
-//   (labels[r] == r): `find` ends after at most i steps, there are no cycles.
+//   they start at NONE, and the only writes are atomicMin(labels[hi], lo)
+//   with lo < hi and (compress) labels[i] = root, root <= i. So every parent
+//   chain strictly decreases until a root (labels[r] == NONE, or == r once
+//   compressed): `find` ends after at most i steps, there are no cycles.
 // - `unite(a, b)` (union) loops on a pair (a, b): it takes the two roots, and
 //   atomicMin links the larger root hi to the smaller lo. If atomicMin returns
-//   hi, hi was still a root: the link is made and the loop ends. Otherwise
+//   NONE, hi was still a root: the link is made and the loop ends. Otherwise
 //   another invocation had linked hi to old < hi meanwhile; labels[hi] is now
 //   min(old, lo), so hi is joined to lo or stays joined to old, and the loop
 //   goes on with the pair (old, lo) to join the other one too. Each round
@@ -58,12 +64,20 @@ fn is_active(i: u32) -> bool {
     return c == WEAK || c == STRONG;
 }
 
+// The parent of a root that has not been compressed (labels as cleared).
+const NONE: u32 = 0xffffffffu;
+
+// The parent of i: NONE, an index below i, or i itself (a compressed root).
+fn parent(i: u32) -> u32 {
+    return ~atomicLoad(&labels[i]);
+}
+
 // The root of i's tree.
 fn find(i: u32) -> u32 {
     var r = i;
     loop {
-        let n = atomicLoad(&labels[r]);
-        if (n == r) { return r; }
+        let n = parent(r);
+        if (n == NONE || n == r) { return r; }
         r = n;
     }
     return r; // never reached; naga wants a return after the loop
@@ -79,8 +93,9 @@ fn unite(a0: u32, b0: u32) {
         if (a == b) { return; }
         let hi = max(a, b);
         let lo = min(a, b);
-        let old = atomicMin(&labels[hi], lo);
-        if (old == hi) { return; }
+        // atomicMin(labels[hi], lo) through the complement
+        let old = ~atomicMax(&labels[hi], ~lo);
+        if (old == NONE) { return; }
         // hi was linked to old < hi meanwhile: join old with lo as well.
         a = old;
         b = lo;
@@ -90,20 +105,6 @@ fn unite(a0: u32, b0: u32) {
 // The atlas index of pixel id.
 fn at(id: vec3<u32>) -> u32 {
     return loff(id.z) + id.y * lw(id.z) + id.x;
-}
-
-fn init_px(id: vec3<u32>) {
-    let i = at(id);
-    atomicStore(&labels[i], i);
-}
-
-@compute @workgroup_size(64, 1, 1)
-fn init(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    // id.x is NO_TILE past the last tile
-    if (id.x >= lw(id.z)) { return; }
-    let end = min(id.y + TILE, lh(id.z));
-    for (var y = id.y; y < end; y++) { init_px(vec3<u32>(id.x, y, id.z)); }
 }
 
 fn merge_px(id: vec3<u32>) {
@@ -135,7 +136,7 @@ fn compress_px(id: vec3<u32>) {
     // Roots do not change any more: every store writes a root, an ancestor
     // of i, so concurrent finds still end at the same root.
     let root = find(i);
-    atomicStore(&labels[i], root);
+    atomicStore(&labels[i], ~root);
     // A STRONG pixel marks its component (final_edges reads the mark only
     // after this dispatch has ended).
     if (ruled[i] == STRONG) { atomicOr(&flags[root], 1u); }
@@ -153,7 +154,8 @@ fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) 
 fn final_edges_px(id: vec3<u32>) {
     let i = at(id);
     var e = 0u;
-    if (is_active(i) && atomicLoad(&flags[atomicLoad(&labels[i])]) == 1u) { e = EDGE; }
+    // after compress every active pixel's parent is its root
+    if (is_active(i) && atomicLoad(&flags[parent(i)]) == 1u) { e = EDGE; }
     edges[i] = e;
 }
 

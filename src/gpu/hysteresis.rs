@@ -1,8 +1,9 @@
 //! SPEC 7 rule 3 (hysteresis) on the GPU: shaders/hysteresis.wgsl, mirroring
 //! src/cpu/hysteresis.rs. `ruled` -> `edges` (255 / 0), all levels at once, by
-//! union-find connected-component labelling in four dispatches (init, merge,
-//! compress (with the STRONG flags), final_edges): exact after a fixed number of dispatches,
-//! with no read-back and no iteration cap (the shader argues why).
+//! union-find connected-component labelling in three dispatches (merge,
+//! compress (with the STRONG flags), final_edges) after clearing the labels
+//! and flags: exact after a fixed number of dispatches, with no read-back and
+//! no iteration cap (the shader argues why).
 
 use super::buffers::Buffers;
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b, full_source};
@@ -21,7 +22,7 @@ pub const BINDINGS: &[Binding] = &[
 ];
 
 /// The entry points in dispatch order.
-pub const ENTRIES: [&str; 4] = ["init", "merge", "compress", "final_edges"];
+pub const ENTRIES: [&str; 3] = ["merge", "compress", "final_edges"];
 
 /// The hysteresis pass.
 #[derive(Debug)]
@@ -68,7 +69,9 @@ impl Pass for HysteresisPass {
     }
 
     fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
-        // `compress` only ever sets flags of roots to 1: start from all zero.
+        // All zero labels: every pixel a root (the shader stores parents
+        // complemented). `compress` only ever sets flags of roots to 1.
+        encoder.clear_buffer(&b.labels, 0, None);
         encoder.clear_buffer(&b.flags, 0, None);
     }
 }
