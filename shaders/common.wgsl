@@ -93,6 +93,25 @@ fn tile_column(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
     return vec3<u32>(o.x + li.x % TILE, o.y, o.z);
 }
 
+// The rows [y0, end) of this invocation's column in a column pass, as
+// (x, y0, end, level); no rows (end = y0) past the last tile or the level's
+// right edge.
+fn column_span(wg: vec3<u32>, li: vec3<u32>) -> vec4<u32> {
+    let id = tile_column(wg, li);
+    if (id.x == NO_TILE || id.x >= lw(id.z)) { return vec4<u32>(0u); }
+    return vec4<u32>(id.x, id.y, min(id.y + TILE, lh(id.z)), id.z);
+}
+
+// Work lists of column passes (lfast, response, corner_nms): an entry names
+// the pixel `row` rows below the top of lane `lane`'s column.
+fn list_entry(lane: u32, row: u32) -> u32 { return (lane << 4u) | row; }
+
+// (x, y, level) of entry e of workgroup wg's work list.
+fn list_pixel(wg: vec3<u32>, e: u32) -> vec3<u32> {
+    let p = tile_column(wg, vec3<u32>(e >> 4u, 0u, 0u));
+    return vec3<u32>(p.x, p.y + (e & 15u), p.z);
+}
+
 // Row passes: as column passes, with one invocation per row of a tile that
 // walks the row's TILE pixels. Returns (left column, y, level) of this invocation.
 fn tile_row_segment(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {

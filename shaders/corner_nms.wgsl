@@ -62,8 +62,8 @@ fn suppress(l: u32, p: vec2<u32>) {
 // Work-efficient: a column pass (tile_column) that lists its four tiles'
 // candidates in `todo` (workgroup memory) as it walks them; after one barrier
 // the workgroup's invocations take the list side by side, so the square scan
-// runs in as few SIMD lanes / warps as there are candidates. An entry is
-// lane << 4 | row in the lane's column.
+// runs in as few SIMD lanes / warps as there are candidates. Entries:
+// list_entry (common.wgsl).
 var<workgroup> todo: array<u32, 1024>;
 // zero at the start of the workgroup (WGSL zero-initialises workgroup memory)
 var<workgroup> todo_n: atomic<u32>;
@@ -78,15 +78,14 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         let end = min(id.y + TILE, lh(l));
         for (var y = id.y; y < end; y++) {
             if (cand[loff(l) + y * w + id.x] != 0u) {
-                todo[atomicAdd(&todo_n, 1u)] = (li.x << 4u) | (y - id.y);
+                todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - id.y);
             }
         }
     }
     workgroupBarrier();
     let n = atomicLoad(&todo_n);
     for (var k = li.x; k < n; k += 64u) {
-        let e = todo[k];
-        let p = tile_column(wg, vec3<u32>(e >> 4u, 0u, 0u));
-        suppress(p.z, vec2<u32>(p.x, p.y + (e & 15u)));
+        let p = list_pixel(wg, todo[k]);
+        suppress(p.z, p.xy);
     }
 }

@@ -123,11 +123,8 @@ fn merge_px(id: vec3<u32>) {
 
 @compute @workgroup_size(64, 1, 1)
 fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    // id.x is NO_TILE past the last tile
-    if (id.x >= lw(id.z)) { return; }
-    let end = min(id.y + TILE, lh(id.z));
-    for (var y = id.y; y < end; y++) { merge_px(vec3<u32>(id.x, y, id.z)); }
+    let c = column_span(wg, li);
+    for (var y = c.y; y < c.z; y++) { merge_px(vec3<u32>(c.x, y, c.w)); }
 }
 
 fn compress_px(id: vec3<u32>) {
@@ -144,11 +141,8 @@ fn compress_px(id: vec3<u32>) {
 
 @compute @workgroup_size(64, 1, 1)
 fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    // id.x is NO_TILE past the last tile
-    if (id.x >= lw(id.z)) { return; }
-    let end = min(id.y + TILE, lh(id.z));
-    for (var y = id.y; y < end; y++) { compress_px(vec3<u32>(id.x, y, id.z)); }
+    let c = column_span(wg, li);
+    for (var y = c.y; y < c.z; y++) { compress_px(vec3<u32>(c.x, y, c.w)); }
 }
 
 fn final_edges_px(id: vec3<u32>) {
@@ -161,9 +155,6 @@ fn final_edges_px(id: vec3<u32>) {
 
 @compute @workgroup_size(64, 1, 1)
 fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    // id.x is NO_TILE past the last tile
-    if (id.x >= lw(id.z)) { return; }
-    let end = min(id.y + TILE, lh(id.z));
-    for (var y = id.y; y < end; y++) { final_edges_px(vec3<u32>(id.x, y, id.z)); }
+    let c = column_span(wg, li);
+    for (var y = c.y; y < c.z; y++) { final_edges_px(vec3<u32>(c.x, y, c.w)); }
 }

@@ -112,7 +112,7 @@ fn is_corner(l: u32, px: i32, py: i32) -> bool {
 // tested edge pixels in `todo` (workgroup memory) as it walks them, writing 0
 // at every other pixel; after one barrier the workgroup's invocations take the
 // list side by side and write the decisions, so the test runs in as few SIMD
-// lanes / warps as there are edge pixels. An entry is lane << 4 | row.
+// lanes / warps as there are edge pixels. Entries: list_entry (common.wgsl).
 var<workgroup> todo: array<u32, 1024>;
 // zero at the start of the workgroup (WGSL zero-initialises workgroup memory)
 var<workgroup> todo_n: atomic<u32>;
@@ -135,7 +135,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             let i = loff(l) + y * w + id.x;
             let tested = col && y >= b && y + b < h;
             if (tested && edges[i] == EDGE && (P.use_mask == 0u || mask[i] != 0u)) {
-                todo[atomicAdd(&todo_n, 1u)] = (li.x << 4u) | (y - id.y);
+                todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - id.y);
             } else {
                 cand[i] = 0u;
             }
@@ -144,9 +144,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     workgroupBarrier();
     let n = atomicLoad(&todo_n);
     for (var k = li.x; k < n; k += 64u) {
-        let e = todo[k];
-        let p = tile_column(wg, vec3<u32>(e >> 4u, 0u, 0u));
-        let y = p.y + (e & 15u);
-        cand[loff(p.z) + y * lw(p.z) + p.x] = u32(is_corner(p.z, i32(p.x), i32(y)));
+        let p = list_pixel(wg, todo[k]);
+        cand[loff(p.z) + p.y * lw(p.z) + p.x] = u32(is_corner(p.z, i32(p.x), i32(p.y)));
     }
 }

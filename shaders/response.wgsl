@@ -103,8 +103,8 @@ fn structure_sums(l: u32, x: i32, y: i32) -> vec3<i32> {
 // candidates in `todo` (workgroup memory) as it walks them, writing 0 at every
 // other pixel; after one barrier the workgroup's invocations take the list
 // side by side and write the responses, so the 9x9 window and the formula run
-// in as few SIMD lanes / warps as there are candidates. An entry is
-// lane << 4 | row in the lane's column.
+// in as few SIMD lanes / warps as there are candidates. Entries:
+// list_entry (common.wgsl).
 var<workgroup> todo: array<u32, 1024>;
 // zero at the start of the workgroup (WGSL zero-initialises workgroup memory)
 var<workgroup> todo_n: atomic<u32>;
@@ -120,7 +120,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         for (var y = id.y; y < end; y++) {
             let i = loff(l) + y * w + id.x;
             if (cand[i] != 0u) {
-                todo[atomicAdd(&todo_n, 1u)] = (li.x << 4u) | (y - id.y);
+                todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - id.y);
             } else {
                 resp[i] = 0u;
             }
@@ -129,10 +129,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     workgroupBarrier();
     let n = atomicLoad(&todo_n);
     for (var k = li.x; k < n; k += 64u) {
-        let e = todo[k];
-        let p = tile_column(wg, vec3<u32>(e >> 4u, 0u, 0u));
-        let y = p.y + (e & 15u);
-        let s = structure_sums(p.z, i32(p.x), i32(y));
-        resp[loff(p.z) + y * lw(p.z) + p.x] = bitcast<u32>(harris_from_sums(s.x, s.y, s.z));
+        let p = list_pixel(wg, todo[k]);
+        let s = structure_sums(p.z, i32(p.x), i32(p.y));
+        resp[loff(p.z) + p.y * lw(p.z) + p.x] = bitcast<u32>(harris_from_sums(s.x, s.y, s.z));
     }
 }
