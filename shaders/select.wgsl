@@ -9,14 +9,25 @@
 // - rank_level (indirect, 64 per group): each corner counts the corners of its
 //   level that precede it; it is "taken" iff that count < quota(level) (a level
 //   keeps its best up to its quota). No cap (n_features = 0): all are taken.
+// - count (indirect): each corner adds itself to its bucket, the top
+//   BUCKET_BITS bits of its order key complemented (buckets ascend as keys
+//   descend, so every corner of a lower bucket precedes every corner of a
+//   higher one), and, when taken, to its bucket's taken count.
+// - scan (one workgroup): exclusive prefix sums of both counts over the buckets.
+// - scatter (indirect): each corner claims a slot of its bucket's range of
+//   `members` (in any order).
 // - place (indirect): each corner counts the taken (T) and not taken (U)
-//   corners that precede it. The not-taken corners that fill the spare quota
-//   are the first `spare` of them in order, so a corner is selected iff it is
-//   taken or U < spare, and its output index is T + min(U, spare).
+//   corners that precede it: those of lower buckets from the prefix sums, those
+//   of its own bucket by comparing with the bucket's members. The not-taken
+//   corners that fill the spare quota are the first `spare` of them in order,
+//   so a corner is selected iff it is taken or U < spare, and its output index
+//   is T + min(U, spare).
 // - finish (1 invocation): the final count, indirect args (64 keypoints per
 //   group, and one keypoint per group) and draw args.
-// Both rank loops are O(n^2) over the corner list, tiled through workgroup
-// memory. Positions are unique, so the order is total and the output deterministic.
+// rank_level is O(n^2) over the corner list (tiled through workgroup memory)
+// and runs only under a cap; place is O(n * bucket size): Harris responses
+// spread over many octaves, and a bucket is 1/8 of an octave wide. Positions
+// are unique, so the order is total and the output deterministic.
 // Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/select.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> corners: array<Kp>;
@@ -25,6 +36,21 @@
 @group(0) @binding(3) var<storage, read_write> ranks: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read_write> keypoints: array<Kp>;
 @group(0) @binding(5) var<storage, read_write> indirect: array<u32>;
+// BUCKETS words each: count, taken, corners before the bucket, taken corners
+// before the bucket, slots claimed (cleared by the pass before it runs).
+@group(0) @binding(6) var<storage, read_write> buckets: array<atomic<u32>>;
+// The corners of each bucket, bucket by bucket (its range starts at the
+// bucket's corners-before count).
+@group(0) @binding(7) var<storage, read_write> members: array<u32>;
+
+// gpu::select::BUCKETS = 1 << BUCKET_BITS.
+const BUCKET_BITS: u32 = 12u;
+const BUCKETS: u32 = 4096u;
+const B_COUNT: u32 = 0u;
+const B_TAKEN: u32 = 4096u;
+const B_BEFORE: u32 = 8192u;
+const B_TAKEN_BEFORE: u32 = 12288u;
+const B_CURSOR: u32 = 16384u;
 
 // counter::* in src/gpu/buffers.rs.
 const C_CORNERS: u32 = 0u;
@@ -61,6 +87,9 @@ fn precedes(kj: u32, pj: vec3<u32>, ki: u32, pi: vec3<u32>) -> bool {
 
 fn pos_of(k: Kp) -> vec3<u32> { return vec3(k.level, k.py, k.px); }
 
+// The bucket of an order key: greater keys, lower buckets.
+fn bucket_of(key: u32) -> u32 { return (~key) >> (32u - BUCKET_BITS); }
+
 // Quota left for the best not-taken corners of any level.
 fn spare() -> u32 {
     let taken = atomicLoad(&counters[C_TAKEN]);
@@ -82,7 +111,6 @@ fn args() {
 
 var<workgroup> tile_key: array<u32, GROUP>;
 var<workgroup> tile_pos: array<vec3<u32>, GROUP>;
-var<workgroup> tile_taken: array<u32, GROUP>;
 var<workgroup> wg_n: u32;
 
 // The corner count as a workgroup-uniform value (the loop below has barriers).
@@ -128,39 +156,77 @@ fn rank_level(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invo
 }
 
 @compute @workgroup_size(64)
-fn place(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let n = uniform_count(li);
+fn count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    let live = i < n;
-    var ki = 0u;
-    var pi = vec3(0u);
-    if (live) {
-        ki = ranks[i].x;
-        pi = pos_of(corners[i]);
+    if (i >= corner_count()) { return; }
+    let r = ranks[i];
+    let b = bucket_of(r.x);
+    atomicAdd(&buckets[B_COUNT + b], 1u);
+    if (r.y == 1u) { atomicAdd(&buckets[B_TAKEN + b], 1u); }
+}
+
+// scan: lane li sums buckets 16 li .. 16 li + 15; the lane sums' exclusive
+// prefix (Hillis-Steele over 256 lanes, both counts at once) then gives each
+// lane the start of its run.
+var<workgroup> scan_sums: array<vec2<u32>, 256>;
+
+@compute @workgroup_size(256)
+fn scan(@builtin(local_invocation_index) li: u32) {
+    let first = li * (BUCKETS / 256u);
+    var own = vec2(0u);
+    for (var k = 0u; k < BUCKETS / 256u; k++) {
+        own += vec2(atomicLoad(&buckets[B_COUNT + first + k]), atomicLoad(&buckets[B_TAKEN + first + k]));
     }
-    var taken_before = 0u;
-    var rest_before = 0u;
-    for (var t = 0u; t < n; t += GROUP) {
-        let j = t + li;
-        if (j < n) {
-            tile_key[li] = ranks[j].x;
-            tile_taken[li] = ranks[j].y;
-            tile_pos[li] = pos_of(corners[j]);
-        }
+    scan_sums[li] = own;
+    workgroupBarrier();
+    for (var d = 1u; d < 256u; d <<= 1u) {
+        var add = vec2(0u);
+        if (li >= d) { add = scan_sums[li - d]; }
         workgroupBarrier();
-        let len = min(GROUP, n - t);
-        if (live) {
-            for (var k = 0u; k < len; k++) {
-                if (precedes(tile_key[k], tile_pos[k], ki, pi)) {
-                    if (tile_taken[k] == 1u) { taken_before++; } else { rest_before++; }
-                }
-            }
-        }
+        scan_sums[li] += add;
         workgroupBarrier();
     }
-    if (!live) { return; }
+    // inclusive -> exclusive for this lane's run, then bucket by bucket
+    var acc = scan_sums[li] - own;
+    for (var k = 0u; k < BUCKETS / 256u; k++) {
+        let b = first + k;
+        atomicStore(&buckets[B_BEFORE + b], acc.x);
+        atomicStore(&buckets[B_TAKEN_BEFORE + b], acc.y);
+        acc += vec2(atomicLoad(&buckets[B_COUNT + b]), atomicLoad(&buckets[B_TAKEN + b]));
+    }
+}
+
+@compute @workgroup_size(64)
+fn scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= corner_count()) { return; }
+    let b = bucket_of(ranks[i].x);
+    let slot = atomicLoad(&buckets[B_BEFORE + b]) + atomicAdd(&buckets[B_CURSOR + b], 1u);
+    members[slot] = i;
+}
+
+@compute @workgroup_size(64)
+fn place(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= corner_count()) { return; }
+    let ri = ranks[i];
+    let ki = ri.x;
+    let pi = pos_of(corners[i]);
+    let b = bucket_of(ki);
+    let start = atomicLoad(&buckets[B_BEFORE + b]);
+    let end = start + atomicLoad(&buckets[B_COUNT + b]);
+    // every corner of a lower bucket precedes this one
+    var taken_before = atomicLoad(&buckets[B_TAKEN_BEFORE + b]);
+    var rest_before = start - taken_before;
+    for (var k = start; k < end; k++) {
+        let j = members[k];
+        let rj = ranks[j];
+        if (j != i && precedes(rj.x, pos_of(corners[j]), ki, pi)) {
+            if (rj.y == 1u) { taken_before++; } else { rest_before++; }
+        }
+    }
     let sp = spare();
-    if (ranks[i].y == 1u || rest_before < sp) {
+    if (ri.y == 1u || rest_before < sp) {
         let at = taken_before + min(rest_before, sp);
         if (at < P.capacity) { keypoints[at] = corners[i]; }
     }

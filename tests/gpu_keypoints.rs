@@ -383,6 +383,23 @@ fn select_matches_cpu_on_random_corners() {
     }
 }
 
+/// Every corner in one bucket of select's key buckets (responses within a
+/// few ulps of 1.0, many equal): place compares within the bucket only, so
+/// this is its worst case, and the ties go by position.
+#[test]
+fn select_with_every_corner_in_one_bucket() {
+    let Some(ctx) = t::context() else { return };
+    let pass = SelectPass::new(&ctx.device);
+    for cap in [0, 10, 1000, 3000] {
+        let cfg = Config { n_levels: 4, nms_radius: 0, border: 7, n_features: cap, ..Config::default() };
+        let mut corners = random_corners(&cfg, 200, 150, 2500, 99 + cap);
+        for (k, c) in corners.iter_mut().enumerate() {
+            c.response = f32::from_bits(1.0f32.to_bits() + (k as u32 * 7) % 5);
+        }
+        check_select(&ctx, &pass, &cfg, 200, 150, &corners, &format!("one bucket, cap {cap}"));
+    }
+}
+
 #[test]
 fn select_orders_signed_zeros_and_ties() {
     let Some(ctx) = t::context() else { return };

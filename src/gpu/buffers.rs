@@ -188,6 +188,10 @@ pub struct Buffers {
     pub corners: wgpu::Buffer,
     /// Per corner scratch for select (4 words each).
     pub ranks: wgpu::Buffer,
+    /// select's bucket counts, prefix sums and cursors (`select::BUCKET_WORDS`).
+    pub sel_buckets: wgpu::Buffer,
+    /// select's corners grouped by bucket, one index per keypoint slot.
+    pub sel_members: wgpu::Buffer,
     /// The final keypoints in SPEC 9 order.
     pub keypoints: wgpu::Buffer,
     /// 32-byte descriptors, `descriptors[i]` for `keypoints[i]`.
@@ -310,6 +314,8 @@ impl Buffers {
             resp: px("resp"),
             corners: buf("corners", cap * KP_WORDS * 4),
             ranks: buf("ranks", cap * 16),
+            sel_buckets: buf("sel_buckets", super::select::BUCKET_WORDS * 4),
+            sel_members: buf("sel_members", cap * 4),
             keypoints: buf("keypoints", cap * KP_WORDS * 4),
             descriptors: buf("descriptors", cap * DESC_WORDS * 4),
             counters: buf("counters", counter::LEN as u64 * 4),

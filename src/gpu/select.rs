@@ -20,7 +20,14 @@ pub const BINDINGS: &[Binding] = &[
     b(3, "ranks", Slot::ReadWrite),
     b(4, "keypoints", Slot::ReadWrite),
     b(5, "indirect", Slot::ReadWrite),
+    b(6, "buckets", Slot::ReadWrite),
+    b(7, "members", Slot::ReadWrite),
 ];
+
+/// Buckets of the order keys (`BUCKETS` in shaders/select.wgsl).
+pub const BUCKETS: u64 = 4096;
+/// Words of [`Buffers::sel_buckets`]: five per bucket.
+pub const BUCKET_WORDS: u64 = 5 * BUCKETS;
 
 /// The bindings of the indirectly dispatched entry points: all but
 /// `indirect`, which those dispatches read their sizes from (a buffer may not
@@ -31,13 +38,18 @@ const RANK_BINDINGS: &[Binding] = &[
     b(2, "counters", Slot::ReadWrite),
     b(3, "ranks", Slot::ReadWrite),
     b(4, "keypoints", Slot::ReadWrite),
+    b(6, "buckets", Slot::ReadWrite),
+    b(7, "members", Slot::ReadWrite),
 ];
 
-/// The select pass: four entry points of one shader.
+/// The select pass: seven entry points of one shader, in recording order.
 #[derive(Debug)]
 pub struct SelectPass {
     args: Kernel,
     rank_level: Kernel,
+    count: Kernel,
+    scan: Kernel,
+    scatter: Kernel,
     place: Kernel,
     finish: Kernel,
 }
@@ -47,7 +59,7 @@ pub struct SelectPass {
 pub struct SelectBound {
     /// For `args` and `finish` (with `indirect`).
     full: wgpu::BindGroup,
-    /// For `rank_level` and `place` (without `indirect`).
+    /// For the other entry points (without `indirect`).
     rank: wgpu::BindGroup,
 }
 
@@ -65,6 +77,9 @@ impl Pass for SelectPass {
         Self {
             args: k("args", BINDINGS),
             rank_level: k("rank_level", RANK_BINDINGS),
+            count: k("count", RANK_BINDINGS),
+            scan: k("scan", RANK_BINDINGS),
+            scatter: k("scatter", RANK_BINDINGS),
             place: k("place", RANK_BINDINGS),
             finish: k("finish", BINDINGS),
         }
@@ -77,6 +92,8 @@ impl Pass for SelectPass {
             ("counters", &b.counters),
             ("ranks", &b.ranks),
             ("keypoints", &b.keypoints),
+            ("buckets", &b.sel_buckets),
+            ("members", &b.sel_members),
         ];
         let mut full = common.to_vec();
         full.push(("indirect", &b.indirect));
@@ -86,7 +103,15 @@ impl Pass for SelectPass {
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &SelectBound, b: &Buffers) {
         self.args.dispatch(pass, &bound.full, [1, 1, 1]);
         self.rank_level.dispatch_indirect(pass, &bound.rank, &b.indirect, indirect::CORNERS);
+        self.count.dispatch_indirect(pass, &bound.rank, &b.indirect, indirect::CORNERS);
+        self.scan.dispatch(pass, &bound.rank, [1, 1, 1]);
+        self.scatter.dispatch_indirect(pass, &bound.rank, &b.indirect, indirect::CORNERS);
         self.place.dispatch_indirect(pass, &bound.rank, &b.indirect, indirect::CORNERS);
         self.finish.dispatch(pass, &bound.full, [1, 1, 1]);
+    }
+
+    fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
+        // count and scatter add into the bucket counts and cursors.
+        encoder.clear_buffer(&b.sel_buckets, 0, None);
     }
 }
