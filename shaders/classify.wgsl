@@ -41,18 +41,16 @@ fn class_of(mv: u32, t1: u32, v3: u32, alpha_pct: u32) -> u32 {
 // A column pass (tile_column): the window column of x is looked up once.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    let l = id.z;
-    // id.x is NO_TILE past the last tile
-    if (id.x >= lw(l)) { return; }
+    let span = column_span(wg, li);
+    if (span.y == span.z) { return; }
+    let l = span.w;
     // otsu[l] == 0: the level has no edges (t1 = None on the CPU).
     let t1 = otsu[l];
     // WindowGrid::v3_at: the grid holds xs (nx), ys (ny), col_window (w), row_window (h).
     let g = P.grids[l];
-    let i = grid[g.z + g.x + g.y + id.x];
-    let end = min(id.y + TILE, lh(l));
-    for (var y = id.y; y < end; y++) {
-        let p = loff(l) + y * lw(l) + id.x;
+    let i = grid[g.z + g.x + g.y + span.x];
+    for (var y = span.y; y < span.z; y++) {
+        let p = loff(l) + y * lw(l) + span.x;
         var c = NONE;
         if (t1 != 0u && nms[p] != 0u) {
             let j = grid[g.z + g.x + g.y + lw(l) + y];

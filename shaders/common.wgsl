@@ -80,6 +80,11 @@ fn tile_pixel(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
     return vec3<u32>(o.x + li.x, o.y + li.y, o.z);
 }
 
+// tile_origin of tile k (< COLUMN_TILES) of a column or row pass's workgroup wg.
+fn workgroup_tile(wg: vec3<u32>, k: u32) -> vec3<u32> {
+    return tile_origin((wg.x + wg.y * P.tile_row) * COLUMN_TILES + k);
+}
+
 // Column passes (workgroup_size(64, 1, 1), FrameLayout::column_groups): a
 // workgroup serves COLUMN_TILES consecutive tiles of the list, one invocation
 // per column of a tile, and each invocation walks its column's TILE rows with
@@ -88,7 +93,7 @@ fn tile_pixel(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
 // NO_TILE past the last tile.
 const COLUMN_TILES: u32 = 4u;
 fn tile_column(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
-    let o = tile_origin((wg.x + wg.y * P.tile_row) * COLUMN_TILES + li.x / TILE);
+    let o = workgroup_tile(wg, li.x / TILE);
     if (o.x == NO_TILE) { return o; }
     return vec3<u32>(o.x + li.x % TILE, o.y, o.z);
 }
@@ -115,7 +120,7 @@ fn list_pixel(wg: vec3<u32>, e: u32) -> vec3<u32> {
 // Row passes: as column passes, with one invocation per row of a tile that
 // walks the row's TILE pixels. Returns (left column, y, level) of this invocation.
 fn tile_row_segment(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
-    let o = tile_origin((wg.x + wg.y * P.tile_row) * COLUMN_TILES + li.x / TILE);
+    let o = workgroup_tile(wg, li.x / TILE);
     if (o.x == NO_TILE) { return o; }
     return vec3<u32>(o.x, o.y + li.x % TILE, o.z);
 }

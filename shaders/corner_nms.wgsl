@@ -70,16 +70,11 @@ var<workgroup> todo_n: atomic<u32>;
 
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    let l = id.z;
-    let w = lw(l);
-    // id.x is NO_TILE past the last tile
-    if (id.x < w) {
-        let end = min(id.y + TILE, lh(l));
-        for (var y = id.y; y < end; y++) {
-            if (cand[loff(l) + y * w + id.x] != 0u) {
-                todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - id.y);
-            }
+    let span = column_span(wg, li);
+    let l = span.w;
+    for (var y = span.y; y < span.z; y++) {
+        if (cand[loff(l) + y * lw(l) + span.x] != 0u) {
+            todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
         }
     }
     workgroupBarrier();

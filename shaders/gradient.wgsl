@@ -36,19 +36,17 @@ fn magnitude(sq: u32) -> u32 { return isqrt(sq) >> 1u; }
 // reads clamp (x, y themselves are inside).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    let l = id.z;
-    // id.x is NO_TILE past the last tile
-    if (id.x >= lw(l)) { return; }
+    let span = column_span(wg, li);
+    if (span.y == span.z) { return; }
+    let l = span.w;
     let w = lw(l);
     let h = lh(l);
-    let x = id.x;
+    let x = span.x;
     let xr = min(x + 1u, w - 1u);
-    var row = loff(l) + id.y * w;
+    var row = loff(l) + span.y * w;
     var a = i32(denoised[row + x]);   // (x, y)
     var b = i32(denoised[row + xr]);  // (x+1, y)
-    let end = min(id.y + TILE, h);
-    for (var y = id.y; y < end; y++) {
+    for (var y = span.y; y < span.z; y++) {
         let below = loff(l) + min(y + 1u, h - 1u) * w;
         let c = i32(denoised[below + x]);   // (x, y+1)
         let e = i32(denoised[below + xr]);  // (x+1, y+1)

@@ -20,28 +20,24 @@ var<workgroup> bins: array<atomic<u32>, 1024>;
 // barrier each invocation adds 16 of the bins to the global histogram.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    let l = id.z;
+    let span = column_span(wg, li);
+    let l = span.w;
     let sub = (li.x / TILE) * 256u;
-    // id.x is NO_TILE past the last tile
-    if (id.x < lw(l)) {
-        let end = min(id.y + TILE, lh(l));
-        var run_v = 0u;
-        var run_n = 0u;
-        for (var y = id.y; y < end; y++) {
-            let v = min(m[loff(l) + y * lw(l) + id.x], 255u);
-            if (v != run_v && run_n != 0u) {
-                atomicAdd(&bins[sub + run_v], run_n);
-                run_n = 0u;
-            }
-            run_v = v;
-            run_n += 1u;
+    var run_v = 0u;
+    var run_n = 0u;
+    for (var y = span.y; y < span.z; y++) {
+        let v = min(m[loff(l) + y * lw(l) + span.x], 255u);
+        if (v != run_v && run_n != 0u) {
+            atomicAdd(&bins[sub + run_v], run_n);
+            run_n = 0u;
         }
-        if (run_n != 0u) { atomicAdd(&bins[sub + run_v], run_n); }
+        run_v = v;
+        run_n += 1u;
     }
+    if (run_n != 0u) { atomicAdd(&bins[sub + run_v], run_n); }
     workgroupBarrier();
     // Bins 16 li.x .. 16 li.x + 15 all belong to tile li.x / 16 of the workgroup.
-    let t = tile_column(wg, vec3<u32>((li.x / 16u) * TILE, 0u, 0u));
+    let t = workgroup_tile(wg, li.x / 16u);
     if (t.x == NO_TILE) { return; }
     for (var k = li.x * 16u; k < li.x * 16u + 16u; k++) {
         let c = atomicLoad(&bins[k]);

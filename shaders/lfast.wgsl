@@ -119,26 +119,22 @@ var<workgroup> todo_n: atomic<u32>;
 
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    let l = id.z;
+    let span = column_span(wg, li);
+    let l = span.w;
     let w = lw(l);
     let h = lh(l);
-    // id.x is NO_TILE past the last tile
-    if (id.x < w) {
-        // Only pixels at least `border` (>= 7) from every side are tested; a
-        // level with w or h <= 2 * border has none. Written this way (no
-        // w - border) so nothing underflows.
-        let b = max(P.border, 7u);
-        let col = id.x >= b && id.x + b < w;
-        let end = min(id.y + TILE, h);
-        for (var y = id.y; y < end; y++) {
-            let i = loff(l) + y * w + id.x;
-            let tested = col && y >= b && y + b < h;
-            if (tested && edges[i] == EDGE && (P.use_mask == 0u || mask[i] != 0u)) {
-                todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - id.y);
-            } else {
-                cand[i] = 0u;
-            }
+    // Only pixels at least `border` (>= 7) from every side are tested; a
+    // level with w or h <= 2 * border has none. Written this way (no
+    // w - border) so nothing underflows.
+    let b = max(P.border, 7u);
+    let col = span.x >= b && span.x + b < w;
+    for (var y = span.y; y < span.z; y++) {
+        let i = loff(l) + y * w + span.x;
+        let tested = col && y >= b && y + b < h;
+        if (tested && edges[i] == EDGE && (P.use_mask == 0u || mask[i] != 0u)) {
+            todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
+        } else {
+            cand[i] = 0u;
         }
     }
     workgroupBarrier();

@@ -5,8 +5,6 @@
 @group(0) @binding(1) var<storage, read> src: array<u32>;
 @group(0) @binding(2) var<storage, read_write> dst: array<u32>;
 
-fn px(l: u32, x: i32, y: i32) -> u32 { return src[clamped(l, x, y)]; }
-
 // |G - Gn| > delta * G for all four neighbours (up, down, left, right), as
 // integers (u32 cannot overflow: delta_den <= 10^4, delta_num <= 10^6, values <= 255).
 fn is_noise(g: u32, n: vec4<u32>) -> bool {
@@ -64,19 +62,18 @@ fn row3(row: u32, xl: u32, x: u32, xr: u32) -> vec3<u32> {
 // with the 3x3 window in registers (3 reads per pixel instead of 13).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    let l = id.z;
-    if (id.x >= lw(l) || id.y >= lh(l)) { return; }
+    let span = column_span(wg, li);
+    if (span.y == span.z) { return; }
+    let l = span.w;
     let w = lw(l);
     let h = lh(l);
     let base = loff(l);
-    let x = id.x;
+    let x = span.x;
     let xl = select(x - 1u, 0u, x == 0u);
     let xr = min(x + 1u, w - 1u);
-    var a = row3(base + select(id.y - 1u, 0u, id.y == 0u) * w, xl, x, xr);
-    var b = row3(base + id.y * w, xl, x, xr);
-    let end = min(id.y + TILE, h);
-    for (var y = id.y; y < end; y++) {
+    var a = row3(base + select(span.y - 1u, 0u, span.y == 0u) * w, xl, x, xr);
+    var b = row3(base + span.y * w, xl, x, xr);
+    for (var y = span.y; y < span.z; y++) {
         let c = row3(base + min(y + 1u, h - 1u) * w, xl, x, xr);
         var v = b.y;
         if (is_noise(v, vec4<u32>(a.y, c.y, b.x, b.z))) { v = median9(a, b, c); }

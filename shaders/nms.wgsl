@@ -34,15 +34,12 @@ fn s_or_zero(l: u32, x: i32, y: i32) -> u32 {
 // A column pass (tile_column): one invocation per 16 pixels.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    let l = id.z;
-    // id.x is NO_TILE past the last tile
-    if (id.x >= lw(l)) { return; }
-    let x = i32(id.x);
-    let end = min(id.y + TILE, lh(l));
-    for (var yy = id.y; yy < end; yy++) {
+    let span = column_span(wg, li);
+    let l = span.w;
+    let x = i32(span.x);
+    for (var yy = span.y; yy < span.z; yy++) {
         let y = i32(yy);
-        let i = loff(l) + yy * lw(l) + id.x;
+        let i = loff(l) + yy * lw(l) + span.x;
         let v = s[i];
         var keep = 0u;
         if (v != 0u) {

@@ -111,19 +111,14 @@ var<workgroup> todo_n: atomic<u32>;
 
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    let l = id.z;
-    let w = lw(l);
-    // id.x is NO_TILE past the last tile
-    if (id.x < w) {
-        let end = min(id.y + TILE, lh(l));
-        for (var y = id.y; y < end; y++) {
-            let i = loff(l) + y * w + id.x;
-            if (cand[i] != 0u) {
-                todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - id.y);
-            } else {
-                resp[i] = 0u;
-            }
+    let span = column_span(wg, li);
+    let l = span.w;
+    for (var y = span.y; y < span.z; y++) {
+        let i = loff(l) + y * lw(l) + span.x;
+        if (cand[i] != 0u) {
+            todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
+        } else {
+            resp[i] = 0u;
         }
     }
     workgroupBarrier();

@@ -47,17 +47,16 @@ fn rule_at(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>) -> u32 {
 // A column pass (tile_column): the 3x3 window walks down in registers.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    let l = id.z;
-    // id.x is NO_TILE past the last tile
-    if (id.x >= lw(l)) { return; }
-    let y0 = i32(id.y);
-    var a = row3(l, id.x, y0 - 1);
-    var b = row3(l, id.x, y0);
-    let end = min(y0 + i32(TILE), i32(lh(l)));
-    for (var y = y0; y < end; y++) {
-        let c = row3(l, id.x, y + 1);
-        ruled[loff(l) + u32(y) * lw(l) + id.x] = rule_at(a, b, c);
+    let span = column_span(wg, li);
+    if (span.y == span.z) { return; }
+    let l = span.w;
+    let x = span.x;
+    let y0 = i32(span.y);
+    var a = row3(l, x, y0 - 1);
+    var b = row3(l, x, y0);
+    for (var y = y0; y < i32(span.z); y++) {
+        let c = row3(l, x, y + 1);
+        ruled[loff(l) + u32(y) * lw(l) + x] = rule_at(a, b, c);
         a = b;
         b = c;
     }

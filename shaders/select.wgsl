@@ -45,12 +45,12 @@
 
 // gpu::select::BUCKETS = 1 << BUCKET_BITS.
 const BUCKET_BITS: u32 = 12u;
-const BUCKETS: u32 = 4096u;
+const BUCKETS: u32 = 1u << BUCKET_BITS;
 const B_COUNT: u32 = 0u;
-const B_TAKEN: u32 = 4096u;
-const B_BEFORE: u32 = 8192u;
-const B_TAKEN_BEFORE: u32 = 12288u;
-const B_CURSOR: u32 = 16384u;
+const B_TAKEN: u32 = BUCKETS;
+const B_BEFORE: u32 = 2u * BUCKETS;
+const B_TAKEN_BEFORE: u32 = 3u * BUCKETS;
+const B_CURSOR: u32 = 4u * BUCKETS;
 
 // counter::* in src/gpu/buffers.rs.
 const C_CORNERS: u32 = 0u;

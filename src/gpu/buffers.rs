@@ -85,9 +85,6 @@ pub struct Allocated {
     pub keypoints: u64,
     /// Windows.
     pub windows: u64,
-    /// Bins of the window histograms: 256 per window, for as many windows as
-    /// `windows` (a smaller frame may have more windows).
-    pub window_bins: u64,
     /// Words of the grid buffer.
     pub grid: u64,
     /// Bytes of the input buffer.
@@ -108,7 +105,6 @@ impl Allocated {
             px: layout.total_px_exact,
             keypoints: layout.capacity as u64,
             windows: levels * per_level,
-            window_bins: 256 * levels * per_level,
             // xs, ys, then per level a cell header and at most 2 cuts per window and 2 more per axis
             grid: sides
                 + levels * 2 * MAX_WINDOWS_PER_AXIS as u64
@@ -123,7 +119,6 @@ impl Allocated {
         self.px >= other.px
             && self.keypoints >= other.keypoints
             && self.windows >= other.windows
-            && self.window_bins >= other.window_bins
             && self.grid >= other.grid
             && self.input >= other.input
             && self.levels >= other.levels
@@ -230,7 +225,10 @@ impl Buffers {
         }
         let px_bytes = layout.total_px as u64 * 4;
         let kp_bytes = layout.capacity as u64 * KP_WORDS * 4;
-        let largest = px_bytes.max(kp_bytes).max(4 * allocated.window_bins);
+        // 256 bins of 4 bytes per window, for as many windows as `windows`
+        // (a smaller frame may have more windows)
+        let window_hist_bytes = 1024 * allocated.windows;
+        let largest = px_bytes.max(kp_bytes).max(window_hist_bytes);
         let max_binding = limits.max_storage_buffer_binding_size;
         if largest > max_binding || largest > limits.max_buffer_size {
             return Err(Error::GpuLimits {
@@ -304,7 +302,7 @@ impl Buffers {
             otsu: buf("otsu", 4 * n_levels),
             grid: init("grid", bytemuck::cast_slice(&grid), storage),
             windows: buf("windows", 16 * allocated.windows),
-            window_hist: buf("window_hist", 4 * allocated.window_bins),
+            window_hist: buf("window_hist", window_hist_bytes),
             classes: px("classes"),
             ruled: px("ruled"),
             labels: px("labels"),

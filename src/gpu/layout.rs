@@ -208,18 +208,20 @@ impl FrameLayout {
     /// every level's 16x16 tiles, in rows of [`TILE_ROW`] workgroups
     /// (shaders/common.wgsl `tile_pixel` maps a workgroup to its tile).
     pub fn pixel_groups(&self) -> [u32; 3] {
-        let t = self.params.total_tiles;
-        let row = self.params.tile_row.max(1);
-        if t <= row { [t, 1, 1] } else { [row, t.div_ceil(row), 1] }
+        self.in_rows(self.params.total_tiles)
     }
 
     /// Workgroups of a column pass over all levels at once: [`COLUMN_TILES`]
     /// tiles of the tile list per 64-invocation workgroup (shaders/common.wgsl
     /// `tile_column`), in rows of at most `tile_row` workgroups.
     pub fn column_groups(&self) -> [u32; 3] {
-        let t = self.params.total_tiles.div_ceil(COLUMN_TILES);
+        self.in_rows(self.params.total_tiles.div_ceil(COLUMN_TILES))
+    }
+
+    /// `n` workgroups in rows of at most `tile_row` (the device's per-dimension limit).
+    fn in_rows(&self, n: u32) -> [u32; 3] {
         let row = self.params.tile_row.max(1);
-        if t <= row { [t, 1, 1] } else { [row, t.div_ceil(row), 1] }
+        if n <= row { [n, 1, 1] } else { [row, n.div_ceil(row), 1] }
     }
 
     /// Workgroups of a per-pixel pass over level `l` alone.
@@ -228,11 +230,11 @@ impl FrameLayout {
         [w.div_ceil(TILE), h.div_ceil(TILE), 1]
     }
 
-    /// Workgroups of a column pass over level `l` alone: 64 columns by
-    /// [`TILE`] rows per 64-invocation workgroup (shaders/pyramid.wgsl).
+    /// Workgroups of a column pass over level `l` alone: one column per
+    /// invocation of the 64-invocation workgroup, [`TILE`] rows (shaders/pyramid.wgsl).
     pub fn level_column_groups(&self, l: usize) -> [u32; 3] {
         let (w, h) = self.sizes[l];
-        [w.div_ceil(64), h.div_ceil(TILE), 1]
+        [w.div_ceil(COLUMN_TILES * TILE), h.div_ceil(TILE), 1]
     }
 
     /// Range of level `l` in a per-pixel atlas.
