@@ -14,37 +14,51 @@
 //! - `edges`: `CpuDetector::edge_image_into` (SPEC 1-7 on level 0 only, fused path),
 //!   one output plane reused from frame to frame as a video loop would;
 //! - `lfast_detect_and_compute`: `CpuDetector::detect_and_compute`, default config;
-//! - `orb_baseline`: `baseline::orb::OrbDetector` with `n_features = 2000`.
+//! - `orb_baseline`: `baseline::orb::OrbDetector` with `n_features = 2000`;
+//! - `edges_pyramid`: the fused edge path on each of the 8 levels of the
+//!   default pyramid (built once per frame before timing, as the OpenCV side's),
+//!   level after level with a scratch per level as `detect` keeps them;
+//!   with `describe`, the floor analysis of `scripts/bench_opencv.py`;
+//! - `describe`: `CpuDetector::compute` on the frame's own L-FAST keypoints
+//!   (found before timing): pyramid, blur, orientation and rBRIEF.
 //!
 //! `scripts/bench_opencv.py` runs this and times OpenCV on the same frames.
 
 use lfast::baseline::orb::{OrbDetector, OrbParams};
-use lfast::cpu::CpuDetector;
+use lfast::config::DELTA_DEN;
+use lfast::cpu::{CpuDetector, fused, pyramid};
 use lfast::{Config, Plane};
 use serde_json::json;
 use std::hint::black_box;
 use std::time::Instant;
 
 fn usage() -> ! {
-    eprintln!("usage: bench_frames [--repeats R] [--only edges|lfast_detect_and_compute|orb_baseline] FILE...");
+    eprintln!(
+        "usage: bench_frames [--repeats R] [--only edges|lfast_detect_and_compute|orb_baseline|edges_pyramid|describe] FILE..."
+    );
     std::process::exit(2);
 }
 
 /// Runs `f` on every frame once (warm-up), then `repeats` times; returns ms per frame of each timed pass.
 fn time_passes(frames: &[Plane<u8>], repeats: usize, mut f: impl FnMut(&Plane<u8>) -> usize) -> (Vec<f64>, f64) {
+    time_indexed(frames.len(), repeats, |i| f(&frames[i]))
+}
+
+/// [`time_passes`] over frame indices `0..n` (for inputs prepared per frame).
+fn time_indexed(n: usize, repeats: usize, mut f: impl FnMut(usize) -> usize) -> (Vec<f64>, f64) {
     let mut count = 0usize;
-    for img in frames {
-        count += black_box(f(img));
+    for i in 0..n {
+        count += black_box(f(i));
     }
     let mut per_frame = Vec::with_capacity(repeats);
     for _ in 0..repeats {
         let t = Instant::now();
-        for img in frames {
-            black_box(f(img));
+        for i in 0..n {
+            black_box(f(i));
         }
-        per_frame.push(t.elapsed().as_secs_f64() * 1e3 / frames.len() as f64);
+        per_frame.push(t.elapsed().as_secs_f64() * 1e3 / n as f64);
     }
-    (per_frame, count as f64 / frames.len() as f64)
+    (per_frame, count as f64 / n as f64)
 }
 
 fn summary(per_frame: &[f64], mean_count: f64, count_name: &str) -> serde_json::Value {
@@ -83,21 +97,25 @@ fn main() -> lfast::Result<()> {
     let det = CpuDetector::new(Config::default())?;
     let orb = OrbDetector::new(OrbParams { n_features: 2000, ..OrbParams::default() })?;
 
-    const METHODS: [&str; 3] = ["edges", "lfast_detect_and_compute", "orb_baseline"];
+    const METHODS: [&str; 5] = ["edges", "lfast_detect_and_compute", "orb_baseline", "edges_pyramid", "describe"];
     if only.as_deref().is_some_and(|m| !METHODS.contains(&m)) {
         usage();
     }
     let run = |m: &str| only.as_deref().is_none_or(|o| o == m);
     let mut methods = serde_json::Map::new();
+    let edge_count = |e: &Plane<u8>| {
+        // a vectorised count (byte sums over chunks of 255): this runs inside the timed loop
+        e.data.chunks(255).map(|c| c.iter().map(|&v| (v != 0) as u8).sum::<u8>() as usize).sum::<usize>()
+    };
     if run(METHODS[0]) {
         let mut e = Plane::default();
         let (t, n) = time_passes(&frames, repeats, |img| {
             det.edge_image_into(img.view(), &mut e).expect("valid image");
-            // a vectorised count (byte sums over chunks of 255): this runs inside the timed loop
-            e.data.chunks(255).map(|c| c.iter().map(|&v| (v != 0) as u8).sum::<u8>() as usize).sum::<usize>()
+            edge_count(&e)
         });
         methods.insert(METHODS[0].into(), summary(&t, n, "mean_edge_pixels"));
     }
+
     if run(METHODS[1]) {
         let (t, n) =
             time_passes(&frames, repeats, |img| det.detect_and_compute(img.view(), None).expect("valid image").0.len());
@@ -107,6 +125,38 @@ fn main() -> lfast::Result<()> {
         let (t, n) =
             time_passes(&frames, repeats, |img| orb.detect_and_compute(img.view()).expect("valid image").0.len());
         methods.insert(METHODS[2].into(), summary(&t, n, "mean_keypoints"));
+    }
+    if run(METHODS[3]) {
+        let pyramids: Vec<Vec<Plane<u8>>> = frames
+            .iter()
+            .map(|f| {
+                let mut levels = Vec::new();
+                pyramid::pyramid_into(f, &det.config().level_sizes(f.width, f.height), &mut levels);
+                levels
+            })
+            .collect();
+        // one scratch per level, as `detect` keeps them (each level keeps its size)
+        let mut sc: Vec<fused::EdgeScratch> = Vec::new();
+        let cfg = det.config();
+        let (t, n) = time_indexed(frames.len(), repeats, |i| {
+            sc.resize_with(pyramids[i].len(), Default::default);
+            pyramids[i]
+                .iter()
+                .zip(&mut sc)
+                .map(|(lv, sc)| {
+                    fused::edges_fused_into(lv.view(), cfg.delta_num(), DELTA_DEN, cfg.alpha_pct, sc);
+                    edge_count(&sc.edges)
+                })
+                .sum()
+        });
+        methods.insert(METHODS[3].into(), summary(&t, n, "mean_edge_pixels"));
+    }
+    if run(METHODS[4]) {
+        let kps: Vec<_> = frames.iter().map(|f| det.detect(f.view(), None)).collect::<lfast::Result<_>>()?;
+        let (t, n) = time_indexed(frames.len(), repeats, |i| {
+            det.compute(frames[i].view(), &kps[i]).expect("own keypoints").len()
+        });
+        methods.insert(METHODS[4].into(), summary(&t, n, "mean_keypoints"));
     }
 
     let mut sizes: Vec<[u32; 2]> = frames.iter().map(|f| [f.width, f.height]).collect();

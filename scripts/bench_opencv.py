@@ -19,6 +19,16 @@ the target applies to the median ratio):
   write JSON) / a Python loop of cv2.imread + ORB(2000).detectAndCompute
                                                        target <= 0.5
 
+Two more pairs, without a target, split L-FAST+ORB into the parts OpenCV also
+has, for the floor analysis in BENCHMARKS.md:
+  improved Canny on each of the 8 pyramid levels / cv2.Canny(100, 200) on an
+      8-level pyramid of the same sizes (both pyramids built before timing)
+  describe our keypoints (lfast compute(): pyramid, blur, orientation, rBRIEF)
+      / cv2 ORB(2000).compute on its own keypoints (pyramid, blur, rBRIEF)
+and the floor line compares the L-FAST+ORB target (0.5 x cv2 ORB(2000)) with
+OpenCV's own Canny over the 8 levels: an L-FAST front end built from OpenCV's
+fastest primitives would spend that on its edge maps alone.
+
 The whole-process row runs the CLI binary (--lfast-bin, default
 target/release/lfast) over the frames' directory into a fresh temporary
 directory, R times after one warm-up, and reads the wall time of each run;
@@ -56,7 +66,22 @@ PAIRS = [
     ("lfast_detect_and_compute", "cv2_orb2000", "L-FAST+ORB detect_and_compute / cv2 ORB(2000)", 0.5),
     ("orb_baseline", "cv2_orb2000", "our ORB baseline (2000) / cv2 ORB(2000)", 1.0),
     ("cli_detect_cpu", "cv2_imread_orb2000", "lfast detect DIR --backend cpu / cv2 imread+ORB loop", 0.5),
+    ("edges_pyramid", "cv2_canny_pyramid", "improved Canny, 8 levels / cv2.Canny, 8 levels", None),
+    ("describe", "cv2_orb_compute", "describe own keypoints / cv2 ORB compute", None),
 ]
+
+# The default pyramid (Config: 8 levels, scale 1.2), sizes round(W / s^l) as SPEC 10.
+N_LEVELS, SCALE = 8, 1.2
+
+
+def pyramid(img):
+    h, w = img.shape
+    levels = [img]
+    for lv in range(1, N_LEVELS):
+        s = SCALE**lv
+        size = (max(1, round(w / s)), max(1, round(h / s)))
+        levels.append(cv2.resize(levels[-1], size, interpolation=cv2.INTER_LINEAR))
+    return levels
 
 
 def time_passes(frames, repeats, fn):
@@ -103,9 +128,17 @@ def run_opencv(files, repeats):
     orb = cv2.ORB_create(2000)
     canny_t, canny_n = time_passes(frames, repeats, lambda img: int(cv2.countNonZero(cv2.Canny(img, 100, 200))))
     orb_t, orb_n = time_passes(frames, repeats, lambda img: len(orb.detectAndCompute(img, None)[0]))
+    pyramids = [pyramid(img) for img in frames]
+    canny_p_t, canny_p_n = time_passes(
+        pyramids, repeats, lambda p: sum(int(cv2.countNonZero(cv2.Canny(lv, 100, 200))) for lv in p)
+    )
+    with_kps = [(img, orb.detect(img, None)) for img in frames]
+    compute_t, compute_n = time_passes(with_kps, repeats, lambda fk: len(orb.compute(fk[0], fk[1])[0]))
     return {
         "cv2_canny": summary(canny_t, canny_n, "mean_edge_pixels"),
         "cv2_orb2000": summary(orb_t, orb_n, "mean_keypoints"),
+        "cv2_canny_pyramid": summary(canny_p_t, canny_p_n, "mean_edge_pixels"),
+        "cv2_orb_compute": summary(compute_t, compute_n, "mean_keypoints"),
     }
 
 
@@ -223,6 +256,12 @@ def main():
         verdict = "" if target is None else ("  met" if r <= target else "  NOT met")
         print(f"{label:50} {r:7.2f} {r_min:7.2f} {('<= %.1f' % target) if target else '-':>7}{verdict}")
 
+    orb_ms = methods["cv2_orb2000"]["median_ms"]
+    canny_p = methods["cv2_canny_pyramid"]["median_ms"]
+    floor = {"target_ms": 0.5 * orb_ms, "cv2_canny_pyramid_ms": canny_p, "fraction_of_orb": canny_p / orb_ms}
+    print(f"\nfloor: the L-FAST+ORB target is 0.5 x {orb_ms:.2f} = {0.5 * orb_ms:.2f} ms/frame; "
+          f"cv2.Canny alone over the 8 levels takes {canny_p:.2f} ms ({canny_p / orb_ms:.2f} of cv2 ORB(2000))")
+
     if args.json_out:
         report = {
             "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
@@ -237,6 +276,7 @@ def main():
             "loadavg_after": os.getloadavg(),
             "methods": methods,
             "ratios": ratios,
+            "floor": floor,
         }
         args.json_out.parent.mkdir(parents=True, exist_ok=True)
         args.json_out.write_text(json.dumps(report, indent=2) + "\n")
