@@ -140,3 +140,39 @@ struct Kp {
     bin: u32,
     pad: u32,
 }
+
+// SPEC 2-3 numerics of gradient.wgsl, nms.wgsl and gradient_nms.wgsl (one
+// definition for the three), mirroring src/cpu/gradient.rs and src/cpu/nms.rs.
+
+// floor(sqrt(v)) for every u32: the f32 square root (however the device
+// rounds it, within far less than 1 of sqrt(v)) then one exact integer
+// correction either way; r <= 65535 keeps r * r and (r + 1)^2 in u32. A
+// bit-by-bit loop (the earlier form) ran 10-15 divergent iterations per pixel.
+fn isqrt(v: u32) -> u32 {
+    var r = min(u32(sqrt(f32(v))), 65535u);
+    if (r * r > v) {
+        r -= 1u;
+    } else if (r < 65535u && (r + 1u) * (r + 1u) <= v) {
+        r += 1u;
+    }
+    return r;
+}
+
+// `magnitude` in src/cpu/gradient.rs.
+fn magnitude(sq: u32) -> u32 { return isqrt(sq) >> 1u; }
+
+// Neighbour offsets (first.xy, second.xy) of the direction sector of (gx2, gy2).
+// tan(22.5°) ≈ 13573/32768 and tan(67.5°) ≈ 79109/32768; |g| <= 510 keeps the
+// products far below 2^32.
+fn sector(gx2: i32, gy2: i32) -> vec4<i32> {
+    let ax = u32(abs(gx2));
+    let ay = u32(abs(gy2));
+    if (ay * 32768u < 13573u * ax) {
+        return vec4(-1, 0, 1, 0);
+    } else if (ay * 32768u > 79109u * ax) {
+        return vec4(0, -1, 0, 1);
+    } else if ((gx2 > 0) == (gy2 > 0)) {
+        return vec4(-1, -1, 1, 1);
+    }
+    return vec4(1, -1, -1, 1);
+}

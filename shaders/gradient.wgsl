@@ -9,28 +9,6 @@
 @group(0) @binding(4) var<storage, read_write> s: array<u32>;
 @group(0) @binding(5) var<storage, read_write> m: array<u32>;
 
-// floor(sqrt(v)), bit by bit (no float: exact for every u32). S <= 2 * 510^2 < 2^20,
-// but the loop is exact over the whole u32 range.
-fn isqrt(v: u32) -> u32 {
-    var rem = v;
-    var root = 0u;
-    var bit = 1u << 30u;
-    while (bit > rem) && (bit != 0u) { bit >>= 2u; }
-    while bit != 0u {
-        if rem >= root + bit {
-            rem -= root + bit;
-            root = (root >> 1u) + bit;
-        } else {
-            root >>= 1u;
-        }
-        bit >>= 2u;
-    }
-    return root;
-}
-
-// `magnitude` in src/cpu/gradient.rs.
-fn magnitude(sq: u32) -> u32 { return isqrt(sq) >> 1u; }
-
 // A column pass (tile_column): rows y and y + 1 of columns x and x + 1 walk
 // down in registers (two reads per pixel instead of four). Right and bottom
 // reads clamp (x, y themselves are inside).

@@ -9,22 +9,6 @@
 @group(0) @binding(3) var<storage, read> s: array<u32>;
 @group(0) @binding(4) var<storage, read_write> nms: array<u32>;
 
-// Neighbour offsets (first.xy, second.xy) of the direction sector of (gx2, gy2).
-// tan(22.5°) ≈ 13573/32768 and tan(67.5°) ≈ 79109/32768; |g| <= 510 keeps the
-// products far below 2^32.
-fn sector(gx2: i32, gy2: i32) -> vec4<i32> {
-    let ax = u32(abs(gx2));
-    let ay = u32(abs(gy2));
-    if (ay * 32768u < 13573u * ax) {
-        return vec4(-1, 0, 1, 0);
-    } else if (ay * 32768u > 79109u * ax) {
-        return vec4(0, -1, 0, 1);
-    } else if ((gx2 > 0) == (gy2 > 0)) {
-        return vec4(-1, -1, 1, 1);
-    }
-    return vec4(1, -1, -1, 1);
-}
-
 // S at (x, y) of level l, 0 outside the image (no clamping here).
 fn s_or_zero(l: u32, x: i32, y: i32) -> u32 {
     if (x < 0 || y < 0 || x >= i32(lw(l)) || y >= i32(lh(l))) { return 0u; }

@@ -1,7 +1,8 @@
-//! GPU SPEC 2-6 (gradient, nms, histogram, otsu, local_threshold, classify)
-//! against the CPU reference, bit for bit: each stage alone on the CPU output
-//! of the stage before it, on sizes that cross the 16-pixel tiles and on
-//! several pyramid levels, then all six chained on the GPU from `denoised`.
+//! GPU SPEC 2-6 (gradient, nms, histogram, their fusion gradient_nms, otsu,
+//! local_threshold, classify) against the CPU reference, bit for bit: each
+//! stage alone on the CPU output of the stage before it, on sizes that cross
+//! the 16-pixel tiles and on several pyramid levels, then the pipeline's front
+//! passes chained on the GPU from `denoised`.
 
 mod common;
 use common::TestRng as Rng;
@@ -11,6 +12,7 @@ use lfast::cpu::classify::{NONE, STRONG};
 use lfast::cpu::{self, EdgeMap};
 use lfast::gpu::classify::ClassifyPass;
 use lfast::gpu::gradient::GradientPass;
+use lfast::gpu::gradient_nms::GradientNmsPass;
 use lfast::gpu::histogram::HistogramPass;
 use lfast::gpu::local_threshold::LocalThresholdPass;
 use lfast::gpu::nms::NmsPass;
@@ -224,6 +226,48 @@ fn histogram_matches_cpu() {
         // Running twice gives the same bins (cleared, not accumulated).
         t::run(&ctx, &pass, &b).unwrap();
         assert_eq!(t::download(&ctx, &b.hist).unwrap(), hist, "{name} second run");
+    }
+}
+
+/// The fused pass (the pipeline's) gives the staged passes' M, NMS flags and
+/// histogram: on the cases, and on low-contrast noise (D in 0..4, so equal
+/// neighbours and every sector are frequent) at sizes crossing the tiles.
+#[test]
+fn gradient_nms_matches_cpu() {
+    let Some(ctx) = t::context() else { return };
+    let pass = GradientNmsPass::new(&ctx.device);
+    // per case: its name, buffers and per level (D, M, NMS flags, histogram) from the CPU
+    type Want = (Plane<u8>, Plane<u16>, Plane<u8>, [u32; 256]);
+    let mut cases: Vec<(String, Buffers, Vec<Want>)> = CASES
+        .iter()
+        .map(|c| {
+            let Case { name, b, cpu } = case(&ctx, c);
+            let want = cpu.into_iter().map(|em| (em.denoised, em.gradient.m, em.nms, em.histogram)).collect();
+            (name, b, want)
+        })
+        .collect();
+    let mut r = Rng::new(29);
+    for (w, h) in [(47u32, 33u32), (16, 2), (2, 19), (1, 1)] {
+        let d = Plane::from_vec(w, h, (0..w * h).map(|_| r.below_u64(4) as u8).collect()).unwrap();
+        let g = cpu::gradient::gradient(&d);
+        let (nms, hist) = (cpu::nms::nms(&g), cpu::histogram::histogram(&g.m));
+        let b = Buffers::new(&ctx.device, &Config { n_levels: 1, ..Config::default() }, w, h).unwrap();
+        cases.push((format!("{w}x{h} noise"), b, vec![(d, g.m, nms, hist)]));
+    }
+    for (name, b, want) in cases {
+        for buf in [&b.m, &b.nms, &b.hist] {
+            poison(&ctx, buf);
+        }
+        for (l, (d, ..)) in want.iter().enumerate() {
+            t::upload_plane(&ctx, &b, &b.denoised, l, d);
+        }
+        t::run(&ctx, &pass, &b).unwrap();
+        let hist = t::download(&ctx, &b.hist).unwrap();
+        for (l, (_, m, nms, h)) in want.iter().enumerate() {
+            assert_eq!(t::download_level(&ctx, &b, &b.m, l).unwrap(), words(m), "M {name} level {l}");
+            assert_eq!(t::download_level(&ctx, &b, &b.nms, l).unwrap(), words(nms), "nms {name} level {l}");
+            assert_eq!(&hist[l * 256..][..256], &h[..], "hist {name} level {l}");
+        }
     }
 }
 
@@ -515,27 +559,12 @@ fn classify_boundaries() {
 /// on the encoder, then one compute pass with the six dispatches in order.
 fn run_front(ctx: &GpuContext, b: &Buffers) {
     let dev = &ctx.device;
-    let (g, n, hi, o, lt, c) = (
-        GradientPass::new(dev),
-        NmsPass::new(dev),
-        HistogramPass::new(dev),
-        OtsuPass::new(dev),
-        LocalThresholdPass::new(dev),
-        ClassifyPass::new(dev),
-    );
+    let (g, o, lt, c) =
+        (GradientNmsPass::new(dev), OtsuPass::new(dev), LocalThresholdPass::new(dev), ClassifyPass::new(dev));
     let scope = dev.push_error_scope(lfast::wgpu::ErrorFilter::Validation);
-    let bound = (
-        g.bind(dev, b).unwrap(),
-        n.bind(dev, b).unwrap(),
-        hi.bind(dev, b).unwrap(),
-        o.bind(dev, b).unwrap(),
-        lt.bind(dev, b).unwrap(),
-        c.bind(dev, b).unwrap(),
-    );
+    let bound = (g.bind(dev, b).unwrap(), o.bind(dev, b).unwrap(), lt.bind(dev, b).unwrap(), c.bind(dev, b).unwrap());
     let mut enc = dev.create_command_encoder(&Default::default());
     g.prepare(&mut enc, b);
-    n.prepare(&mut enc, b);
-    hi.prepare(&mut enc, b);
     o.prepare(&mut enc, b);
     lt.prepare(&mut enc, b);
     c.prepare(&mut enc, b);
@@ -545,18 +574,16 @@ fn run_front(ctx: &GpuContext, b: &Buffers) {
             timestamp_writes: None,
         });
         g.record(&mut cp, &bound.0, b);
-        n.record(&mut cp, &bound.1, b);
-        hi.record(&mut cp, &bound.2, b);
-        o.record(&mut cp, &bound.3, b);
-        lt.record(&mut cp, &bound.4, b);
-        c.record(&mut cp, &bound.5, b);
+        o.record(&mut cp, &bound.1, b);
+        lt.record(&mut cp, &bound.2, b);
+        c.record(&mut cp, &bound.3, b);
     }
     ctx.queue.submit([enc.finish()]);
     assert!(pollster::block_on(scope.pop()).is_none(), "validation error");
     ctx.wait().unwrap();
 }
 
-/// The six passes chained on the GPU from an uploaded `denoised`, on a
+/// The front passes (fused gradient + NMS + histogram, Otsu, local thresholds, classify) chained on the GPU from an uploaded `denoised`, on a
 /// 3-level pyramid of real images: classes (and the stage outputs on the way)
 /// equal the CPU's.
 #[test]
@@ -574,7 +601,7 @@ fn chained_front_matches_cpu_on_real_images() {
     for (name, img) in imgs {
         let cfg = Config { n_levels: 3, ..Config::default() };
         let Case { b, cpu, .. } = cases_from(&ctx, cfg, &img, name.to_string());
-        for buf in [&b.gx, &b.gy, &b.s, &b.m, &b.nms, &b.hist, &b.otsu, &b.windows, &b.classes] {
+        for buf in [&b.m, &b.nms, &b.hist, &b.otsu, &b.windows, &b.classes] {
             poison(&ctx, buf);
         }
         for (l, em) in cpu.iter().enumerate() {

@@ -14,6 +14,7 @@ pub mod context;
 pub mod corner_nms;
 pub mod detector;
 pub mod gradient;
+pub mod gradient_nms;
 pub mod histogram;
 pub mod hysteresis;
 pub mod kernel;

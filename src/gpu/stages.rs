@@ -98,9 +98,7 @@ stages! {
     luma: LumaPass,
     pyramid: PyramidPass,
     median: MedianPass,
-    gradient: GradientPass,
-    nms: NmsPass,
-    histogram: HistogramPass,
+    gradient_nms: GradientNmsPass,
     otsu: OtsuPass,
     local_threshold: LocalThresholdPass,
     classify: ClassifyPass,
@@ -113,7 +111,7 @@ stages! {
     blur: BlurPass,
     orientation: OrientationPass,
     orb: OrbPass;
-    standalone: matcher,
+    standalone: matcher, gradient, nms, histogram,
 }
 
 /// Per-stage GPU timestamps (when the adapter has `TIMESTAMP_QUERY`): a

@@ -1,0 +1,115 @@
+// SPEC 2-4 (first half) in one walk: the LSD gradient, non-maximum suppression
+// and the per-level histogram of M8. Equal to gradient.wgsl -> nms.wgsl ->
+// histogram.wgsl (which mirror src/cpu/gradient.rs, nms.rs, histogram.rs), and
+// to the CPU's fused rows (src/cpu/fused.rs, `gradient_row` and the NMS inside
+// `classify_row`), without the gx, gy and S planes: those live only in registers.
+// denoised -> m (M), nms (1 = survivor), hist[l * 256 + M8]; all levels in one
+// dispatch (over the tile list). `hist` is cleared by the pass before this runs.
+// Tests: tests/gpu_edges_front.rs (this pass == the three staged passes and the
+// CPU) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+
+@group(0) @binding(1) var<storage, read> denoised: array<u32>;
+@group(0) @binding(2) var<storage, read_write> m: array<u32>;
+@group(0) @binding(3) var<storage, read_write> nms: array<u32>;
+@group(0) @binding(4) var<storage, read_write> hist: array<atomic<u32>>;
+
+// Sub-histograms of the workgroup's COLUMN_TILES tiles, as in histogram.wgsl.
+var<workgroup> bins: array<atomic<u32>, 1024>;
+
+// D at columns x-1, x, x+1, x+2 of row y (clamped into the level; x-1 only
+// feeds S at x-1, which is 0 at x = 0 whatever it reads).
+fn d4(l: u32, x: u32, y: u32) -> vec4<i32> {
+    let row = loff(l) + min(y, lh(l) - 1u) * lw(l);
+    let last = lw(l) - 1u;
+    return vec4<i32>(
+        i32(denoised[row + max(x, 1u) - 1u]),
+        i32(denoised[row + x]),
+        i32(denoised[row + min(x + 1u, last)]),
+        i32(denoised[row + min(x + 2u, last)]),
+    );
+}
+
+// (gx2, gy2) at columns x-1, x, x+1 from D rows y (a) and y + 1 (c): SPEC 2's
+// 2x2 differences, right and bottom neighbours clamped as in gradient.wgsl.
+fn grad3(a: vec4<i32>, c: vec4<i32>) -> array<vec2<i32>, 3> {
+    // columns k and k + 1 of rows a and c give column k's differences
+    let dx = a.yzw + c.yzw - a.xyz - c.xyz;
+    let dy = c.xyz + c.yzw - a.xyz - a.yzw;
+    return array<vec2<i32>, 3>(vec2(dx.x, dy.x), vec2(dx.y, dy.y), vec2(dx.z, dy.z));
+}
+
+// S at columns x-1, x, x+1 of a row whose gradients are `g`: 0 outside the
+// level (`valid` says which columns are inside, and whether the row is).
+fn s3(g: array<vec2<i32>, 3>, valid: vec3<bool>) -> vec3<u32> {
+    let s0 = u32(g[0].x * g[0].x + g[0].y * g[0].y);
+    let s1 = u32(g[1].x * g[1].x + g[1].y * g[1].y);
+    let s2 = u32(g[2].x * g[2].x + g[2].y * g[2].y);
+    return select(vec3<u32>(0u), vec3<u32>(s0, s1, s2), valid);
+}
+
+// A column pass (tile_column): the invocation of column x walks its rows with
+// D of columns x-1..x+2 and S of columns x-1..x+1 in registers (rows y-1, y,
+// y+1), four reads and two writes per pixel; runs of equal M8 are counted
+// locally, as in histogram.wgsl.
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let span = column_span(wg, li);
+    let l = span.w;
+    let x = span.x;
+    let h = lh(l);
+    let sub = (li.x / TILE) * 256u;
+    var run_v = 0u;
+    var run_n = 0u;
+    if (span.y < span.z) {
+        let cols = vec3<bool>(x > 0u, true, x + 1u < lw(l));
+        let none = vec3<bool>(false);
+        // S of row y0 - 1 (none above row 0), gradients and S of row y0
+        var dcur = d4(l, x, span.y);
+        var dnext = d4(l, x, span.y + 1u);
+        var up = vec3<u32>(0u);
+        if (span.y > 0u) {
+            up = s3(grad3(d4(l, x, span.y - 1u), dcur), cols);
+        }
+        var g = grad3(dcur, dnext);
+        var mid = s3(g, cols);
+        for (var y = span.y; y < span.z; y++) {
+            // row y + 1: its S (0 below the last row) and, next time, its gradients
+            let dnn = d4(l, x, y + 2u);
+            let gn = grad3(dnext, dnn);
+            let down = s3(gn, select(none, cols, y + 1u < h));
+            let v = mid.y;
+            var keep = 0u;
+            if (v != 0u) {
+                let o = sector(g[1].x, g[1].y);
+                var rows = array<vec3<u32>, 3>(up, mid, down);
+                let a = rows[o.y + 1][o.x + 1];
+                let b = rows[o.w + 1][o.z + 1];
+                keep = select(0u, 1u, v > a && v >= b);
+            }
+            let i = loff(l) + y * lw(l) + x;
+            let mv = magnitude(v);
+            m[i] = mv;
+            nms[i] = keep;
+            let m8 = min(mv, 255u);
+            if (m8 != run_v && run_n != 0u) {
+                atomicAdd(&bins[sub + run_v], run_n);
+                run_n = 0u;
+            }
+            run_v = m8;
+            run_n += 1u;
+            up = mid;
+            mid = down;
+            g = gn;
+            dnext = dnn;
+        }
+    }
+    if (run_n != 0u) { atomicAdd(&bins[sub + run_v], run_n); }
+    workgroupBarrier();
+    // Bins 16 li.x .. 16 li.x + 15 all belong to tile li.x / 16 of the workgroup.
+    let t = workgroup_tile(wg, li.x / 16u);
+    if (t.x == NO_TILE) { return; }
+    for (var k = li.x * 16u; k < li.x * 16u + 16u; k++) {
+        let c = atomicLoad(&bins[k]);
+        if (c != 0u) { atomicAdd(&hist[t.z * 256u + k % 256u], c); }
+    }
+}
