@@ -6,6 +6,7 @@
 //! 256-bin histogram per cell is built in a single pass, and a window's
 //! histogram is the sum of its cells'. Min, max and lower median come from it.
 
+use crate::cpu::simd::dispatch;
 use crate::image::Plane;
 pub use crate::spec::windows::{WindowLayout, cell_cuts, nearest_windows, window_origins};
 use rayon::prelude::*;
@@ -97,17 +98,31 @@ impl Cells {
             for &x0 in &l.xs {
                 let (i0, i1) = (cell_of(&self.cx, x0), cell_of(&self.cx, x0 + l.a));
                 let mut hist = [0u32; 256];
-                for band in &cells[j0..j1] {
-                    for cell in &band[i0..i1] {
-                        for (acc, &c) in hist.iter_mut().zip(cell.iter()) {
-                            *acc += c;
-                        }
-                    }
-                }
+                sum_cells(&cells[j0..j1], i0, i1, &mut hist);
                 stats.push(stats_of(&hist));
             }
         }
         stats
+    }
+}
+
+dispatch! {
+    /// `out` = the sum of the histograms of cells `i0..i1` of every band in
+    /// `bands`, 64 bins at a time in registers (eight AVX2 vectors) rather than
+    /// a load, add and store of the whole histogram per cell.
+    fn sum_cells(bands: &[Vec<[u32; 256]>], i0: usize, i1: usize, out: &mut [u32; 256]) {
+        for (b, o) in out.chunks_exact_mut(64).enumerate() {
+            let mut acc = [0u32; 64];
+            for band in bands {
+                for cell in &band[i0..i1] {
+                    let c: &[u32; 64] = cell[b * 64..b * 64 + 64].try_into().expect("64 bins");
+                    for (a, &v) in acc.iter_mut().zip(c) {
+                        *a += v;
+                    }
+                }
+            }
+            o.copy_from_slice(&acc);
+        }
     }
 }
 
