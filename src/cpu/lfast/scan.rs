@@ -34,17 +34,16 @@ impl<'a> Window<'a> {
         fits.then_some(Self { d: &e.data, s, w, c: y * w })
     }
 
-    /// Whether the support map is set at column `cx` of row `y + dy`.
+    /// The `N` support-map bytes at columns `cx..cx+N` of row `y + dy`.
     ///
     /// # Safety
-    /// `-7 <= dy <= 7` and `cx < w`.
+    /// `-7 <= dy <= 7` and `cx + N <= w`.
     #[inline(always)]
-    unsafe fn supports(&self, cx: usize, dy: isize) -> bool {
-        debug_assert!((-7..=7).contains(&dy) && cx < self.w);
+    unsafe fn support_bytes<const N: usize>(&self, cx: usize, dy: isize) -> &'a [u8; N] {
+        debug_assert!((-7..=7).contains(&dy) && cx + N <= self.w);
         let row = (self.c as isize + dy * self.w as isize) as usize;
-        // SAFETY: y >= 7 and |dy| <= 7 give row >= 0; row + cx < row + w <=
-        // (y + 8) * w <= s.len() (the invariant), as cx < w.
-        unsafe { *self.s.get_unchecked(row + cx) != 0 }
+        // SAFETY: as in `bytes`, with s (which the invariant bounds as d).
+        unsafe { &*self.s.as_ptr().add(row + cx).cast::<[u8; N]>() }
     }
 
     /// The `N` bytes at columns `cx..cx+N` of row `y + dy`.
@@ -112,94 +111,41 @@ pub(super) fn support_map_into(e: &Plane<u8>, support: u32, s: &mut Vec<u8>) {
     }
 }
 
-/// [`super::supports`] for p = (x, y), from the support map.
-///
-/// # Safety
-/// `7 <= x < w - 7` (`w` the window's width).
-#[inline(always)]
-unsafe fn supports_at(win: &Window<'_>, x: usize, t: usize) -> bool {
-    let (dx, dy) = CIRCLE[t & 15];
-    // SAFETY: |dx|, |dy| <= 3 (tested), so 2dy is in -6..=6 and the column
-    // x + 2dx in x-6..=x+6, which is >= 1 and < w - 1.
-    unsafe { win.supports((x as isize + 2 * dx as isize) as usize, 2 * dy as isize) }
+/// Per circle mask, bit t set where t is the middle of one of its branches
+/// (the lower of the two middles of an even run; [`super::for_each_branch`]):
+/// 128 KiB, built once. Branch mode decides from it without a data-dependent
+/// loop or branch per pixel.
+fn branch_mids() -> &'static [u16; 65536] {
+    static MIDS: std::sync::OnceLock<Box<[u16; 65536]>> = std::sync::OnceLock::new();
+    MIDS.get_or_init(|| {
+        let mut t = Box::new([0u16; 65536]);
+        for (mask, mids) in t.iter_mut().enumerate() {
+            super::for_each_branch(mask as u32, |s, len| *mids |= 1 << ((s + (len - 1) / 2) % 16));
+        }
+        t
+    })
 }
 
-/// The middle index of the branch starting at `s` of `mask` (as [`super::is_corner`]).
+/// [`super::is_corner`]'s decision from p's circle mask and its support mask
+/// (bit t set where `q_t` supports p, [`super::supports`]), branch-free.
 #[inline(always)]
-fn branch_mid(mask: u32, s: u32) -> usize {
-    let doubled = mask | (mask << 16);
-    let len = (!(doubled >> s)).trailing_zeros().min(16);
-    ((s + (len - 1) / 2) % 16) as usize
-}
-
-/// [`super::is_corner`]'s decision from p's circle mask, `sup(t)` deciding Step 4.
-/// Returns what it returns; `sup` is called only where its answer can matter.
-#[inline(always)]
-pub(super) fn decide(mask: u32, p: &LfastParams, mut sup: impl FnMut(usize) -> bool) -> bool {
+pub(super) fn decide(mask: u32, sup: u32, p: &LfastParams, mids: &[u16; 65536]) -> bool {
     match p.mode {
         Mode::Paper => {
-            // fewer than two points; or two opposite ones with p on their line
-            let rest = mask & mask.wrapping_sub(1);
-            if rest == 0 {
-                return false;
-            }
-            if rest & (rest - 1) == 0 && rest.trailing_zeros() - mask.trailing_zeros() == 8 {
-                return false;
-            }
-            let mut supported = 0;
-            let mut m = mask;
-            while m != 0 {
-                let t = m.trailing_zeros() as usize;
-                m &= m - 1;
-                if sup(t) {
-                    supported += 1;
-                    if supported >= 2 {
-                        return true;
-                    }
-                }
-            }
-            false
+            // at least two points, not just two opposite ones, and two supported
+            let n = mask.count_ones();
+            let opposite = 31u32.wrapping_sub(mask.leading_zeros()).wrapping_sub(mask.trailing_zeros()) == 8;
+            (n > 2) | ((n == 2) & !opposite) && (mask & sup).count_ones() >= 2
         }
         Mode::Branch => {
-            if mask == 0 || mask == 0xffff {
-                return false;
-            }
-            let straight = |a: usize, b: usize| {
-                let d = a.abs_diff(b);
-                d.min(16 - d) >= 8 - p.straight_tol as usize
-            };
-            let prev = ((mask << 1) | (mask >> 15)) & 0xffff;
-            let starts = mask & !prev;
-            let rest = starts & (starts - 1);
-            if rest == 0 {
-                return false; // one branch
-            }
-            let m0 = branch_mid(mask, starts.trailing_zeros());
-            if rest & (rest - 1) == 0 {
-                // Two branches: a corner iff they are not straight and both supported.
-                let m1 = branch_mid(mask, rest.trailing_zeros());
-                return !straight(m0, m1) && sup(m0) && sup(m1);
-            }
-            // Three or more: a corner iff three are supported, or two that are not straight.
-            let mut first = None;
-            let mut n = 0;
-            let mut s = starts;
-            while s != 0 {
-                let t = branch_mid(mask, s.trailing_zeros());
-                s &= s - 1;
-                if sup(t) {
-                    n += 1;
-                    match first {
-                        None => first = Some(t),
-                        Some(a) => {
-                            if n >= 3 || !straight(a, t) {
-                                return true;
-                            }
-                        }
-                    }
-                }
-            }
-            false
+            // supported branch middles: three, or two that are not a straight line
+            // (one branch, none, and the full circle have fewer than two middles)
+            let s = mids[mask as usize & 0xffff] as u32 & sup;
+            // the two middles' distance (meaningless, and unused, unless c == 2)
+            let d = 31u32.wrapping_sub(s.leading_zeros()).wrapping_sub(s.trailing_zeros());
+            let straight = d.min(16u32.wrapping_sub(d)) >= 8u32.saturating_sub(p.straight_tol);
+            let c = s.count_ones();
+            (c >= 3) | ((c == 2) & !straight)
         }
     }
 }
@@ -214,13 +160,33 @@ unsafe fn chunk_masks(win: &Window<'_>, xs: usize) -> [u16; CHUNK] {
     let rows: [&[u8; CHUNK]; 16] = std::array::from_fn(|i| unsafe {
         win.bytes((xs as isize + CIRCLE[i].0 as isize) as usize, CIRCLE[i].1 as isize)
     });
+    bit_masks(&rows, EDGE)
+}
+
+/// Support masks of the 32 pixels `xs..xs+32`: bit t of entry j set where
+/// `q_t = p + 2 CIRCLE[t]` of p = (xs + j, y) supports p (the support map is 1 there).
+///
+/// # Safety
+/// `7 <= xs` and `xs + 32 <= w - 7`.
+#[inline(always)]
+unsafe fn chunk_supports(win: &Window<'_>, xs: usize) -> [u16; CHUNK] {
+    // SAFETY: |2dx|, |2dy| <= 6, so xs + 2dx >= 1 and xs + 2dx + 32 <= w - 1.
+    let rows: [&[u8; CHUNK]; 16] = std::array::from_fn(|i| unsafe {
+        win.support_bytes((xs as isize + 2 * CIRCLE[i].0 as isize) as usize, 2 * CIRCLE[i].1 as isize)
+    });
+    bit_masks(&rows, 1)
+}
+
+/// Bit i of entry j set where `rows[i][j] == v`.
+#[inline(always)]
+fn bit_masks(rows: &[&[u8; CHUNK]; 16], v: u8) -> [u16; CHUNK] {
     let mut masks = [0u16; CHUNK];
     for (j, m) in masks.iter_mut().enumerate() {
         // bytes, not u16 lanes: twice the pixels per vector
         let (mut lo, mut hi) = (0u8, 0u8);
         for i in 0..8 {
-            lo |= ((rows[i][j] == EDGE) as u8) << i;
-            hi |= ((rows[i + 8][j] == EDGE) as u8) << i;
+            lo |= ((rows[i][j] == v) as u8) << i;
+            hi |= ((rows[i + 8][j] == v) as u8) << i;
         }
         *m = lo as u16 | (hi as u16) << 8;
     }
@@ -234,6 +200,7 @@ dispatch! {
     pub(super) fn scan_row(win: &Window<'_>, y: u32, x0: usize, x1: usize, mrow: Option<&[u8]>,
                            p: &LfastParams, out: &mut Vec<[u32; 2]>) {
         assert!(x0 >= 7 && x1 + 7 <= win.w && x1 >= x0 + CHUNK, "scan_row: columns {x0}..{x1} of {}", win.w);
+        let mids = branch_mids();
         let mut xs = x0;
         let mut skip = 0; // pixels at the start of this chunk done by the one before
         loop {
@@ -247,14 +214,12 @@ dispatch! {
             bits &= u32::MAX << skip;
             if bits != 0 {
                 // SAFETY: as above
-                let masks = unsafe { chunk_masks(win, xs) };
+                let (masks, sups) = unsafe { (chunk_masks(win, xs), chunk_supports(win, xs)) };
                 while bits != 0 {
                     let j = bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    let x = xs + j;
-                    // SAFETY: 7 <= x0 <= x < x1 <= w - 7
-                    if decide(masks[j] as u32, p, |t| unsafe { supports_at(win, x, t) }) {
-                        out.push([x as u32, y]);
+                    if decide(masks[j] as u32, sups[j] as u32, p, mids) {
+                        out.push([(xs + j) as u32, y]);
                     }
                 }
             }
@@ -296,7 +261,7 @@ mod tests {
 
     #[test]
     fn circle_offsets_within_three() {
-        // the SAFETY arguments of supports_at and chunk_masks rely on this
+        // the SAFETY arguments of chunk_masks and chunk_supports rely on this
         assert!(CIRCLE.iter().all(|&(dx, dy)| dx.abs() <= 3 && dy.abs() <= 3));
     }
 
@@ -373,13 +338,12 @@ mod tests {
                 let mut xs = 7;
                 while xs + CHUNK <= w as usize - 7 {
                     // SAFETY: 7 <= xs, xs + 32 <= w - 7
-                    let masks = unsafe { chunk_masks(&win, xs) };
-                    for (j, &m) in masks.iter().enumerate() {
+                    let (masks, sups) = unsafe { (chunk_masks(&win, xs), chunk_supports(&win, xs)) };
+                    for (j, (&m, &sup)) in masks.iter().zip(&sups).enumerate() {
                         let (x, yi) = ((xs + j) as i32, y as i32);
                         proptest::prop_assert_eq!(m as u32, circle_mask(&e, x, yi));
                         for t in 0..16 {
-                            // SAFETY: 7 <= x < w - 7
-                            let got = unsafe { supports_at(&win, xs + j, t) };
+                            let got = sup >> t & 1 == 1;
                             proptest::prop_assert_eq!(got, supports(&e, x, yi, t, support), "({}, {}) t {}", x, y, t);
                         }
                     }
