@@ -17,7 +17,7 @@ use lfast::gpu::histogram::HistogramPass;
 use lfast::gpu::local_threshold::LocalThresholdPass;
 use lfast::gpu::nms::NmsPass;
 use lfast::gpu::otsu::OtsuPass;
-use lfast::gpu::{Buffers, GpuContext, Pass};
+use lfast::gpu::{Buffers, GpuContext, Pass, StagePlanes};
 use lfast::testing as t;
 use lfast::{Config, Plane};
 
@@ -48,9 +48,28 @@ fn case(ctx: &GpuContext, &(w, h, levels, seed, alpha_pct): &(u32, u32, u32, u32
 }
 
 fn cases_from(ctx: &GpuContext, cfg: Config, img: &Plane<u8>, name: String) -> Case {
-    let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
+    let b = Buffers::with_stage_planes(&ctx.device, &cfg, img.width, img.height).unwrap();
     let cpu = t::cpu_levels(&cfg, img).iter().map(|p| cpu::edge_map(p, &cfg)).collect();
     Case { name, b, cpu }
+}
+
+/// The planes of the staged gradient and nms passes.
+fn st(b: &Buffers) -> &StagePlanes {
+    b.stage_planes().expect("made with Buffers::with_stage_planes")
+}
+
+/// A detector's buffers have no gx, gy and S planes (the pipeline's fused
+/// pass needs none): binding the staged passes to them is an error that says
+/// which constructor allocates them.
+#[test]
+fn staged_passes_need_the_stage_planes() {
+    let Some(ctx) = t::context() else { return };
+    let b = Buffers::new(&ctx.device, &Config::default(), 64, 48).unwrap();
+    assert!(b.stage.is_none());
+    let e = GradientPass::new(&ctx.device).bind(&ctx.device, &b).unwrap_err().to_string();
+    assert!(e.contains("Buffers::with_stage_planes"), "{e}");
+    assert!(NmsPass::new(&ctx.device).bind(&ctx.device, &b).is_err());
+    GradientNmsPass::new(&ctx.device).bind(&ctx.device, &b).unwrap();
 }
 
 /// A plane as the u32 words of an atlas level (signed values as their i32 bits).
@@ -81,7 +100,7 @@ fn gradient_matches_cpu() {
     let pass = GradientPass::new(&ctx.device);
     for c in CASES {
         let Case { name, b, cpu, .. } = case(&ctx, c);
-        for buf in [&b.gx, &b.gy, &b.s, &b.m] {
+        for buf in [&st(&b).gx, &st(&b).gy, &st(&b).s, &b.m] {
             poison(&ctx, buf);
         }
         for (l, em) in cpu.iter().enumerate() {
@@ -91,9 +110,9 @@ fn gradient_matches_cpu() {
         for (l, em) in cpu.iter().enumerate() {
             let g = &em.gradient;
             let got = |buf| t::download_level(&ctx, &b, buf, l).unwrap();
-            assert_eq!(got(&b.gx), words(&g.gx2), "gx2 {name} level {l}");
-            assert_eq!(got(&b.gy), words(&g.gy2), "gy2 {name} level {l}");
-            assert_eq!(got(&b.s), words(&g.s), "S {name} level {l}");
+            assert_eq!(got(&st(&b).gx), words(&g.gx2), "gx2 {name} level {l}");
+            assert_eq!(got(&st(&b).gy), words(&g.gy2), "gy2 {name} level {l}");
+            assert_eq!(got(&st(&b).s), words(&g.s), "S {name} level {l}");
             assert_eq!(got(&b.m), words(&g.m), "M {name} level {l}");
         }
     }
@@ -108,12 +127,12 @@ fn gradient_extremes() {
     for d in [[0u8, 255, 0, 255], [255, 0, 255, 0], [0, 0, 0, 255], [0, 255, 255, 255], [255, 0, 0, 255], [7, 7, 7, 7]]
     {
         let d = Plane::from_vec(2, 2, d.to_vec()).unwrap();
-        let b = Buffers::new(&ctx.device, &cfg, 2, 2).unwrap();
+        let b = Buffers::with_stage_planes(&ctx.device, &cfg, 2, 2).unwrap();
         t::upload_plane(&ctx, &b, &b.denoised, 0, &d);
         t::run(&ctx, &pass, &b).unwrap();
         let g = cpu::gradient::gradient(&d);
-        assert_eq!(t::download_level(&ctx, &b, &b.gx, 0).unwrap(), words(&g.gx2), "{:?}", d.data);
-        assert_eq!(t::download_level(&ctx, &b, &b.gy, 0).unwrap(), words(&g.gy2), "{:?}", d.data);
+        assert_eq!(t::download_level(&ctx, &b, &st(&b).gx, 0).unwrap(), words(&g.gx2), "{:?}", d.data);
+        assert_eq!(t::download_level(&ctx, &b, &st(&b).gy, 0).unwrap(), words(&g.gy2), "{:?}", d.data);
         assert_eq!(t::download_level(&ctx, &b, &b.m, 0).unwrap(), words(&g.m), "{:?}", d.data);
     }
 }
@@ -140,16 +159,16 @@ fn gradient_matches_cpu_on_noise() {
             .collect(),
     )
     .unwrap();
-    let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
+    let b = Buffers::with_stage_planes(&ctx.device, &cfg, w, h).unwrap();
     t::upload_plane(&ctx, &b, &b.denoised, 0, &d);
     t::run(&ctx, &pass, &b).unwrap();
     let g = cpu::gradient::gradient(&d);
     for v in [-510, 510] {
         assert!(g.gx2.data.contains(&v) && g.gy2.data.contains(&v));
     }
-    assert_eq!(t::download_level(&ctx, &b, &b.gx, 0).unwrap(), words(&g.gx2));
-    assert_eq!(t::download_level(&ctx, &b, &b.gy, 0).unwrap(), words(&g.gy2));
-    assert_eq!(t::download_level(&ctx, &b, &b.s, 0).unwrap(), words(&g.s));
+    assert_eq!(t::download_level(&ctx, &b, &st(&b).gx, 0).unwrap(), words(&g.gx2));
+    assert_eq!(t::download_level(&ctx, &b, &st(&b).gy, 0).unwrap(), words(&g.gy2));
+    assert_eq!(t::download_level(&ctx, &b, &st(&b).s, 0).unwrap(), words(&g.s));
     assert_eq!(t::download_level(&ctx, &b, &b.m, 0).unwrap(), words(&g.m));
 }
 
@@ -162,9 +181,9 @@ fn nms_matches_cpu() {
         poison(&ctx, &b.nms);
         for (l, em) in cpu.iter().enumerate() {
             let g = &em.gradient;
-            t::upload_level(&ctx, &b, &b.gx, l, &words(&g.gx2));
-            t::upload_level(&ctx, &b, &b.gy, l, &words(&g.gy2));
-            t::upload_plane(&ctx, &b, &b.s, l, &g.s);
+            t::upload_level(&ctx, &b, &st(&b).gx, l, &words(&g.gx2));
+            t::upload_level(&ctx, &b, &st(&b).gy, l, &words(&g.gy2));
+            t::upload_plane(&ctx, &b, &st(&b).s, l, &g.s);
         }
         t::run(&ctx, &pass, &b).unwrap();
         for (l, em) in cpu.iter().enumerate() {
@@ -198,10 +217,10 @@ fn nms_sector_boundaries_and_ties() {
         s: Plane::from_vec(w, h, s).unwrap(),
         m: Plane::new(w, h),
     };
-    let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
-    t::upload_level(&ctx, &b, &b.gx, 0, &words(&g.gx2));
-    t::upload_level(&ctx, &b, &b.gy, 0, &words(&g.gy2));
-    t::upload_plane(&ctx, &b, &b.s, 0, &g.s);
+    let b = Buffers::with_stage_planes(&ctx.device, &cfg, w, h).unwrap();
+    t::upload_level(&ctx, &b, &st(&b).gx, 0, &words(&g.gx2));
+    t::upload_level(&ctx, &b, &st(&b).gy, 0, &words(&g.gy2));
+    t::upload_plane(&ctx, &b, &st(&b).s, 0, &g.s);
     t::run(&ctx, &pass, &b).unwrap();
     let want = cpu::nms::nms(&g);
     assert!(want.data.contains(&1));

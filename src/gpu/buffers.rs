@@ -125,6 +125,19 @@ impl Allocated {
     }
 }
 
+/// The planes only the standalone `gradient` and `nms` passes use: the
+/// pipeline's `gradient_nms` keeps gx2, gy2 and S in registers, so a detector's
+/// buffers go without them (12 bytes per pixel of the atlas).
+#[derive(Debug)]
+pub struct StagePlanes {
+    /// gx2 (i32).
+    pub gx: wgpu::Buffer,
+    /// gy2 (i32).
+    pub gy: wgpu::Buffer,
+    /// S.
+    pub s: wgpu::Buffer,
+}
+
 /// The named buffers of one frame size.
 #[derive(Debug)]
 pub struct Buffers {
@@ -145,12 +158,8 @@ pub struct Buffers {
     pub mask: wgpu::Buffer,
     /// D (SPEC 1).
     pub denoised: wgpu::Buffer,
-    /// gx2 (i32).
-    pub gx: wgpu::Buffer,
-    /// gy2 (i32).
-    pub gy: wgpu::Buffer,
-    /// S.
-    pub s: wgpu::Buffer,
+    /// gx2, gy2 and S: allocated only by [`Buffers::with_stage_planes`].
+    pub stage: Option<StagePlanes>,
     /// M.
     pub m: wgpu::Buffer,
     /// NMS survivors (0/1).
@@ -207,9 +216,28 @@ pub struct Buffers {
 }
 
 impl Buffers {
-    /// Allocates everything for `width x height` under `cfg` (valid). Fails,
-    /// naming the limit, when a buffer would exceed the device's limits.
+    /// Allocates everything the pipeline uses for `width x height` under `cfg`
+    /// (valid). Fails, naming the limit, when a buffer would exceed the device's limits.
     pub fn new(device: &wgpu::Device, cfg: &Config, width: u32, height: u32) -> Result<Self> {
+        Self::build(device, cfg, width, height, false)
+    }
+
+    /// [`new`](Self::new) plus the [`StagePlanes`], for running the staged
+    /// `gradient` and `nms` passes (the per-stage references of the tests).
+    pub fn with_stage_planes(device: &wgpu::Device, cfg: &Config, width: u32, height: u32) -> Result<Self> {
+        Self::build(device, cfg, width, height, true)
+    }
+
+    /// The [`StagePlanes`], or an error naming the constructor that allocates them.
+    pub fn stage_planes(&self) -> Result<&StagePlanes> {
+        self.stage.as_ref().ok_or_else(|| Error::Gpu {
+            reason: "the gx, gy and S planes are not allocated: the staged gradient and nms passes need \
+                     Buffers::with_stage_planes"
+                .into(),
+        })
+    }
+
+    fn build(device: &wgpu::Device, cfg: &Config, width: u32, height: u32, stage_planes: bool) -> Result<Self> {
         let limits = device.limits();
         let mut layout = FrameLayout::new(cfg, width, height);
         layout.params.tile_row = limits.max_compute_workgroups_per_dimension.clamp(1, TILE_ROW);
@@ -293,9 +321,7 @@ impl Buffers {
             gray: px("gray"),
             mask: px("mask"),
             denoised: px("denoised"),
-            gx: px("gx"),
-            gy: px("gy"),
-            s: px("s"),
+            stage: stage_planes.then(|| StagePlanes { gx: px("gx"), gy: px("gy"), s: px("s") }),
             m: px("m"),
             nms: px("nms"),
             hist: buf("hist", 256 * 4 * n_levels),

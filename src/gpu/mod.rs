@@ -36,7 +36,7 @@ pub mod rules;
 pub mod select;
 pub mod stages;
 
-pub use buffers::{Buffers, GpuKeypoint};
+pub use buffers::{Buffers, GpuKeypoint, StagePlanes};
 pub use context::{AutoChoice, GpuContext, GpuOptions, auto_choice, is_hardware, is_software, list_adapters};
 pub use detector::{GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
 pub use layout::FrameLayout;
