@@ -13,9 +13,6 @@
 @group(0) @binding(3) var<storage, read_write> nms: array<u32>;
 @group(0) @binding(4) var<storage, read_write> hist: array<atomic<u32>>;
 
-// Sub-histograms of the workgroup's COLUMN_TILES tiles, as in histogram.wgsl.
-var<workgroup> bins: array<atomic<u32>, 1024>;
-
 // D at columns x-1, x, x+1, x+2 of row y (clamped into the level; x-1 only
 // feeds S at x-1, which is 0 at x = 0 whatever it reads).
 fn d4(l: u32, x: u32, y: u32) -> vec4<i32> {
@@ -50,7 +47,7 @@ fn s3(g: array<vec2<i32>, 3>, valid: vec3<bool>) -> vec3<u32> {
 // A column pass (tile_column): the invocation of column x walks its rows with
 // D of columns x-1..x+2 and S of columns x-1..x+1 in registers (rows y-1, y,
 // y+1), four reads and two writes per pixel; runs of equal M8 are counted
-// locally, as in histogram.wgsl.
+// locally (histogram_bins.wgsl, appended to this shader).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
@@ -58,8 +55,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let x = span.x;
     let h = lh(l);
     let sub = (li.x / TILE) * 256u;
-    var run_v = 0u;
-    var run_n = 0u;
+    var run = vec2<u32>(0u);
     if (span.y < span.z) {
         let cols = vec3<bool>(x > 0u, true, x + 1u < lw(l));
         let none = vec3<bool>(false);
@@ -90,26 +86,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             let mv = magnitude(v);
             m[i] = mv;
             nms[i] = keep;
-            let m8 = min(mv, 255u);
-            if (m8 != run_v && run_n != 0u) {
-                atomicAdd(&bins[sub + run_v], run_n);
-                run_n = 0u;
-            }
-            run_v = m8;
-            run_n += 1u;
+            count_m8(&run, sub, min(mv, 255u));
             up = mid;
             mid = down;
             g = gn;
             dnext = dnn;
         }
     }
-    if (run_n != 0u) { atomicAdd(&bins[sub + run_v], run_n); }
-    workgroupBarrier();
-    // Bins 16 li.x .. 16 li.x + 15 all belong to tile li.x / 16 of the workgroup.
-    let t = workgroup_tile(wg, li.x / 16u);
-    if (t.x == NO_TILE) { return; }
-    for (var k = li.x * 16u; k < li.x * 16u + 16u; k++) {
-        let c = atomicLoad(&bins[k]);
-        if (c != 0u) { atomicAdd(&hist[t.z * 256u + k % 256u], c); }
-    }
+    flush_m8(wg, li, run);
 }

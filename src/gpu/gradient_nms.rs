@@ -7,7 +7,9 @@ use super::kernel::{Binding, PARAMS, Slot, b};
 use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
-pub const SOURCE: &str = include_str!("../../shaders/gradient_nms.wgsl");
+/// (with shaders/histogram_bins.wgsl, the M8 counting it shares).
+pub const SOURCE: &str =
+    concat!(include_str!("../../shaders/gradient_nms.wgsl"), include_str!("../../shaders/histogram_bins.wgsl"));
 /// Its bindings.
 pub const BINDINGS: &[Binding] = &[
     PARAMS,
