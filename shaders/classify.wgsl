@@ -1,7 +1,7 @@
 // SPEC 6: the double adaptive dual threshold (paper Algorithm 2), as exact
 // rational comparisons. Mirrors src/cpu/classify.rs.
 // m, nms, otsu, windows, grid -> classes (NONE 0, WEAK_WEAK 1, WEAK 2,
-// WEAK_STRONG 3, STRONG 4). A column pass, all levels in one dispatch (over
+// WEAK_STRONG 3, STRONG 4; column-packed, common.wgsl pk_word). A column pass, all levels in one dispatch (over
 // the tile list).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/classify.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
@@ -49,6 +49,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     // WindowGrid::v3_at: the grid holds xs (nx), ys (ny), col_window (w), row_window (h).
     let g = P.grids[l];
     let i = grid[g.z + g.x + g.y + span.x];
+    // `classes` is column-packed: four rows to a word, written when complete
+    var word = 0u;
     for (var y = span.y; y < span.z; y++) {
         let p = loff(l) + y * lw(l) + span.x;
         var c = NONE;
@@ -57,6 +59,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             let v3 = windows[(P.levels[l].w + j * g.x + i) * 4u + 3u];
             c = class_of(m[p], t1, v3, P.alpha_pct);
         }
-        classes[p] = c;
+        word |= pk_place(c, y);
+        if ((y & 3u) == 3u || y + 1u == span.z) {
+            classes[pk_word(l, span.x, y)] = word;
+            word = 0u;
+        }
     }
 }

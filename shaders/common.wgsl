@@ -17,7 +17,8 @@ struct Params {
     scales: array<vec4<f32>, 32>,
     // per-level quotas of n_features, four per vec4
     quotas: array<vec4<u32>, 8>,
-    // per level: index of its first 16x16 tile in the tile list, tiles along x, along y, 0
+    // per level: index of its first 16x16 tile in the tile list, tiles along x,
+    // along y, word offset of the level in a column-packed plane (pk_word)
     tiles: array<vec4<u32>, 32>,
     n_levels: u32,
     delta_num: u32,
@@ -106,6 +107,16 @@ fn column_span(wg: vec3<u32>, li: vec3<u32>) -> vec4<u32> {
     if (id.x == NO_TILE || id.x >= lw(id.z)) { return vec4<u32>(0u); }
     return vec4<u32>(id.x, id.y, min(id.y + TILE, lh(id.z)), id.z);
 }
+
+// Column-packed 8-bit planes (`classes`, `ruled`; FrameLayout::packed_offsets,
+// gpu::layout::pack_level): word (y / 4) * w + x of level l holds rows
+// 4 (y / 4) .. + 4 of column x, row y in bits 8 (y % 4) .. + 8. A column walk
+// reads or writes a word per four rows (a tile's 16 rows are 4 whole words, so
+// no two invocations write one word). Rows past the level's last are 0.
+fn pk_word(l: u32, x: u32, y: u32) -> u32 { return P.tiles[l].w + (y >> 2u) * lw(l) + x; }
+fn pk_byte(word: u32, y: u32) -> u32 { return (word >> ((y & 3u) * 8u)) & 0xffu; }
+// Row y's value v in its place of a word being built (OR the four rows together).
+fn pk_place(v: u32, y: u32) -> u32 { return v << ((y & 3u) * 8u); }
 
 // Work lists of column passes (lfast, response, corner_nms): an entry names
 // the pixel `row` rows below the top of lane `lane`'s column.

@@ -1,6 +1,7 @@
 // SPEC 7 rule 3: hysteresis. Mirrors src/cpu/hysteresis.rs: a pixel is an
 // edge (255) iff it is STRONG, or WEAK and joined to a STRONG pixel through
-// 8-connected WEAK pixels.
+// 8-connected WEAK pixels. `ruled` is column-packed (common.wgsl pk_word);
+// labels, flags and edges hold one u32 per pixel.
 //
 // The CPU floods each WEAK component that touches a STRONG pixel. Here the
 // same set comes from connected-component labelling of the active (WEAK or
@@ -59,8 +60,10 @@ const STRONG: u32 = 4u;
 const EDGE: u32 = 255u;
 
 // A pixel the CPU flood can reach or start from: a seed (STRONG) or WEAK.
-fn is_active(i: u32) -> bool {
-    let c = ruled[i];
+// `ruled` is column-packed (common.wgsl pk_word): the class at (x, y) of level l.
+fn class_at(l: u32, x: u32, y: u32) -> u32 { return pk_byte(ruled[pk_word(l, x, y)], y); }
+
+fn is_active(c: u32) -> bool {
     return c == WEAK || c == STRONG;
 }
 
@@ -103,58 +106,64 @@ fn unite(a0: u32, b0: u32) {
 }
 
 // The atlas index of pixel id.
-fn at(id: vec3<u32>) -> u32 {
-    return loff(id.z) + id.y * lw(id.z) + id.x;
-}
 
-fn merge_px(id: vec3<u32>) {
-    let i = at(id);
-    if (!is_active(i)) { return; }
-    let w = lw(id.z);
-    // left, up-left, up, up-right: each 8-neighbour pair is visited once.
-    if (id.x > 0u && is_active(i - 1u)) { unite(i, i - 1u); }
-    if (id.y > 0u) {
+// Union with the active ones of the left, up-left, up and up-right neighbours
+// (each 8-neighbour pair is visited once) of active pixel (x, y) of level l.
+fn merge_px(l: u32, x: u32, y: u32) {
+    let i = loff(l) + y * lw(l) + x;
+    let w = lw(l);
+    if (x > 0u && is_active(class_at(l, x - 1u, y))) { unite(i, i - 1u); }
+    if (y > 0u) {
         let u = i - w;
-        if (id.x > 0u && is_active(u - 1u)) { unite(i, u - 1u); }
-        if (is_active(u)) { unite(i, u); }
-        if (id.x + 1u < w && is_active(u + 1u)) { unite(i, u + 1u); }
+        if (x > 0u && is_active(class_at(l, x - 1u, y - 1u))) { unite(i, u - 1u); }
+        if (is_active(class_at(l, x, y - 1u))) { unite(i, u); }
+        if (x + 1u < w && is_active(class_at(l, x + 1u, y - 1u))) { unite(i, u + 1u); }
     }
 }
 
+// Column passes: each invocation reads its column's packed word once per four
+// rows (its 16 rows are 4 whole words) and works at the active pixels.
 @compute @workgroup_size(64, 1, 1)
 fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
-    for (var y = c.y; y < c.z; y++) { merge_px(vec3<u32>(c.x, y, c.w)); }
+    var word = 0u;
+    for (var y = c.y; y < c.z; y++) {
+        if ((y & 3u) == 0u) { word = ruled[pk_word(c.w, c.x, y)]; }
+        if (is_active(pk_byte(word, y))) { merge_px(c.w, c.x, y); }
+    }
 }
 
-fn compress_px(id: vec3<u32>) {
-    let i = at(id);
-    if (!is_active(i)) { return; }
+fn compress_px(i: u32, strong: bool) {
     // Roots do not change any more: every store writes a root, an ancestor
     // of i, so concurrent finds still end at the same root.
     let root = find(i);
     atomicStore(&labels[i], ~root);
     // A STRONG pixel marks its component (final_edges reads the mark only
     // after this dispatch has ended).
-    if (ruled[i] == STRONG) { atomicOr(&flags[root], 1u); }
+    if (strong) { atomicOr(&flags[root], 1u); }
 }
 
 @compute @workgroup_size(64, 1, 1)
 fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
-    for (var y = c.y; y < c.z; y++) { compress_px(vec3<u32>(c.x, y, c.w)); }
-}
-
-fn final_edges_px(id: vec3<u32>) {
-    let i = at(id);
-    var e = 0u;
-    // after compress every active pixel's parent is its root
-    if (is_active(i) && atomicLoad(&flags[parent(i)]) == 1u) { e = EDGE; }
-    edges[i] = e;
+    var word = 0u;
+    for (var y = c.y; y < c.z; y++) {
+        if ((y & 3u) == 0u) { word = ruled[pk_word(c.w, c.x, y)]; }
+        let k = pk_byte(word, y);
+        if (is_active(k)) { compress_px(loff(c.w) + y * lw(c.w) + c.x, k == STRONG); }
+    }
 }
 
 @compute @workgroup_size(64, 1, 1)
 fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
-    for (var y = c.y; y < c.z; y++) { final_edges_px(vec3<u32>(c.x, y, c.w)); }
+    var word = 0u;
+    for (var y = c.y; y < c.z; y++) {
+        if ((y & 3u) == 0u) { word = ruled[pk_word(c.w, c.x, y)]; }
+        let i = loff(c.w) + y * lw(c.w) + c.x;
+        var e = 0u;
+        // after compress every active pixel's parent is its root
+        if (is_active(pk_byte(word, y)) && atomicLoad(&flags[parent(i)]) == 1u) { e = EDGE; }
+        edges[i] = e;
+    }
 }

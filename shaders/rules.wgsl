@@ -1,5 +1,6 @@
 // SPEC 7 rules 1 and 2: isolated-edge suppression (paper Algorithm 3).
-// Mirrors src/cpu/rules.rs. `classes` (SPEC 6) -> `ruled`, a column pass, all
+// Mirrors src/cpu/rules.rs. `classes` (SPEC 6) -> `ruled`, both column-packed
+// (common.wgsl pk_word), a column pass, all
 // levels in one dispatch (over the tile list). Both rules read the classes
 // of SPEC 6 only, so the result does not depend on the order of invocations.
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/rules.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -14,17 +15,23 @@ const WEAK: u32 = 2u;
 const WEAK_STRONG: u32 = 3u;
 const STRONG: u32 = 4u;
 
-// The classes of (x-1, x, x+1) on row y of level l; NONE outside the level
-// (no replicate border here: a missing neighbour matches no searched class,
-// as rule_at only looks for WEAK_STRONG and WEAK_WEAK).
-fn row3(l: u32, x: u32, y: i32) -> vec3<u32> {
-    var r = vec3<u32>(NONE);
+// The packed words of columns (x-1, x, x+1) holding row y of level l (rows
+// y & ~3 .. + 4); 0, all NONE, outside the level (no replicate border here: a
+// missing neighbour matches no searched class, as rule_at only looks for
+// WEAK_STRONG and WEAK_WEAK; rows past the last of a word are NONE too).
+fn words3(l: u32, x: u32, y: i32) -> vec3<u32> {
+    var r = vec3<u32>(0u);
     if (y < 0 || y >= i32(lh(l))) { return r; }
-    let i = loff(l) + u32(y) * lw(l) + x;
+    let i = pk_word(l, x, u32(y));
     if (x > 0u) { r.x = classes[i - 1u]; }
     r.y = classes[i];
     if (x + 1u < lw(l)) { r.z = classes[i + 1u]; }
     return r;
+}
+
+// Row y's classes of the three columns, from their words.
+fn row3(wd: vec3<u32>, y: i32) -> vec3<u32> {
+    return vec3<u32>(pk_byte(wd.x, u32(y)), pk_byte(wd.y, u32(y)), pk_byte(wd.z, u32(y)));
 }
 
 // True iff one of the 8 neighbours of the centre of the 3x3 window (a above,
@@ -44,19 +51,27 @@ fn rule_at(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>) -> u32 {
     return b.y;
 }
 
-// A column pass (tile_column): the 3x3 window walks down in registers.
+// A column pass (tile_column): the 3x3 window walks down in registers, and
+// the three columns' packed words are read once per four rows.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
     if (span.y == span.z) { return; }
     let l = span.w;
     let x = span.x;
-    let y0 = i32(span.y);
-    var a = row3(l, x, y0 - 1);
-    var b = row3(l, x, y0);
+    let y0 = i32(span.y);  // a multiple of 4: the first row of its words
+    var a = row3(words3(l, x, y0 - 1), y0 - 1);
+    var wd = words3(l, x, y0);
+    var b = row3(wd, y0);
+    var word = 0u;
     for (var y = y0; y < i32(span.z); y++) {
-        let c = row3(l, x, y + 1);
-        ruled[loff(l) + u32(y) * lw(l) + x] = rule_at(a, b, c);
+        if (((y + 1) & 3) == 0) { wd = words3(l, x, y + 1); }
+        let c = row3(wd, y + 1);
+        word |= pk_place(rule_at(a, b, c), u32(y));
+        if ((y & 3) == 3 || y + 1 == i32(span.z)) {
+            ruled[pk_word(l, x, u32(y))] = word;
+            word = 0u;
+        }
         a = b;
         b = c;
     }

@@ -40,6 +40,28 @@ pub fn upload_plane<T: Copy + Into<u32>>(ctx: &GpuContext, b: &Buffers, buf: &wg
     upload_level(ctx, b, buf, l, &v);
 }
 
+/// Writes an 8-bit plane into level `l` of a column-packed buffer (`classes`, `ruled`).
+pub fn upload_packed(ctx: &GpuContext, b: &Buffers, buf: &wgpu::Buffer, l: usize, p: &Plane<u8>) {
+    let r = b.layout.packed_range(l);
+    let words = crate::gpu::layout::pack_level(p.width, p.height, &p.data);
+    assert_eq!(words.len(), r.len(), "level {l} size");
+    if !words.is_empty() {
+        ctx.queue.write_buffer(buf, r.start as u64 * 4, bytemuck::cast_slice(&words));
+    }
+}
+
+/// Level `l` of a column-packed buffer, unpacked: one u32 per pixel, row-major
+/// (as [`download_level`] gives a per-pixel atlas).
+pub fn download_packed(ctx: &GpuContext, b: &Buffers, buf: &wgpu::Buffer, l: usize) -> Result<Vec<u32>> {
+    let r = b.layout.packed_range(l);
+    if r.is_empty() {
+        return Ok(Vec::new());
+    }
+    let bytes = ctx.read_range(buf, r.start as u64 * 4, r.len() as u64 * 4)?;
+    let (w, h) = b.layout.sizes[l];
+    Ok(crate::gpu::layout::unpack_level(w, h, bytemuck::cast_slice(&bytes)).into_iter().map(u32::from).collect())
+}
+
 /// Writes an i32 plane into level `l` (as its bits).
 pub fn upload_plane_i32(ctx: &GpuContext, b: &Buffers, buf: &wgpu::Buffer, l: usize, p: &Plane<i32>) {
     let v: Vec<u32> = p.data.iter().map(|&x| x as u32).collect();

@@ -22,9 +22,10 @@ fn plane(w: u32, h: u32, data: Vec<u8>) -> Plane<u8> {
     Plane::from_vec(w, h, data).expect("plane size")
 }
 
-/// Fills every level of `buf` with `v` (so a pass that skips a pixel shows).
-fn poison(ctx: &GpuContext, b: &Buffers, buf: &wgpu::Buffer, v: u32) {
-    t::upload(ctx, buf, &vec![v; b.layout.total_px as usize]);
+/// Fills the whole of `buf` with `v`, so a pass that skips a pixel shows
+/// (its size, not an atlas: the packed planes are smaller).
+fn poison(ctx: &GpuContext, buf: &wgpu::Buffer, v: u32) {
+    t::upload(ctx, buf, &vec![v; (buf.size() / 4) as usize]);
 }
 
 fn to_u32(p: &Plane<u8>) -> Vec<u32> {
@@ -121,11 +122,11 @@ fn snake(w: u32, h: u32) -> (Plane<u8>, Vec<(u32, u32)>) {
 /// Runs hysteresis on the given ruled planes (one per level of `b`) and
 /// compares every level with the CPU.
 fn check_hysteresis(ctx: &GpuContext, pass: &HysteresisPass, b: &Buffers, planes: &[Plane<u8>], what: &str) {
-    poison(ctx, b, &b.labels, 0xdead_beef);
-    poison(ctx, b, &b.flags, 1);
-    poison(ctx, b, &b.edges, 7);
+    poison(ctx, &b.labels, 0xdead_beef);
+    poison(ctx, &b.flags, 1);
+    poison(ctx, &b.edges, 7);
     for (l, p) in planes.iter().enumerate() {
-        t::upload_plane(ctx, b, &b.ruled, l, p);
+        t::upload_packed(ctx, b, &b.ruled, l, p);
     }
     t::run(ctx, pass, b).unwrap();
     for (l, p) in planes.iter().enumerate() {
@@ -168,8 +169,8 @@ fn check_lfast(
     let mut p = b.layout.params;
     p.use_mask = masks.is_some() as u32;
     ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
-    poison(ctx, b, &b.cand, 1);
-    poison(ctx, b, &b.mask, 0);
+    poison(ctx, &b.cand, 1);
+    poison(ctx, &b.mask, 0);
     for (l, e) in edges.iter().enumerate() {
         t::upload_plane(ctx, b, &b.edges, l, e);
         if let Some(m) = masks {
@@ -283,8 +284,8 @@ fn rules_literal_case() {
         WEAK_WEAK, 0, WEAK, WEAK_STRONG, WEAK_WEAK, 0,
     ]);
     let b = Buffers::new(&ctx.device, &cfg, 6, 3).unwrap();
-    poison(&ctx, &b, &b.ruled, 9);
-    t::upload_plane(&ctx, &b, &b.classes, 0, &c);
+    poison(&ctx, &b.ruled, 9);
+    t::upload_packed(&ctx, &b, &b.classes, 0, &c);
     t::run(&ctx, &pass, &b).unwrap();
     #[rustfmt::skip]
     let want = vec![
@@ -293,7 +294,7 @@ fn rules_literal_case() {
         WEAK, 0, WEAK, WEAK, WEAK, 0,
     ];
     assert_eq!(rules(&c).data, want);
-    assert_eq!(t::download_level(&ctx, &b, &b.ruled, 0).unwrap(), want.iter().map(|&v| v as u32).collect::<Vec<_>>());
+    assert_eq!(t::download_packed(&ctx, &b, &b.ruled, 0).unwrap(), want.iter().map(|&v| v as u32).collect::<Vec<_>>());
 }
 
 #[test]
@@ -304,14 +305,14 @@ fn rules_match_cpu_on_random_classes() {
     for (w, h, levels) in [(37, 29, 3), (130, 75, 4), (17, 1, 1), (1, 1, 1), (1, 19, 2), (16, 16, 2), (64, 33, 5)] {
         let cfg = Config { n_levels: levels, ..Config::default() };
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
-        poison(&ctx, &b, &b.ruled, 9);
+        poison(&ctx, &b.ruled, 9);
         let planes: Vec<Plane<u8>> = b.layout.sizes.iter().map(|&(lw, lh)| random_classes(lw, lh, &mut rng)).collect();
         for (l, p) in planes.iter().enumerate() {
-            t::upload_plane(&ctx, &b, &b.classes, l, p);
+            t::upload_packed(&ctx, &b, &b.classes, l, p);
         }
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in planes.iter().enumerate() {
-            assert_eq!(t::download_level(&ctx, &b, &b.ruled, l).unwrap(), to_u32(&rules(p)), "{w}x{h} level {l}");
+            assert_eq!(t::download_packed(&ctx, &b, &b.ruled, l).unwrap(), to_u32(&rules(p)), "{w}x{h} level {l}");
         }
     }
 }
@@ -329,11 +330,11 @@ fn rules_and_hysteresis_match_cpu_on_real_images() {
         let levels = t::cpu_levels(&cfg, &img);
         let ems: Vec<_> = levels.iter().map(|p| edge_map(p, &cfg)).collect();
         for (l, em) in ems.iter().enumerate() {
-            t::upload_plane(&ctx, &b, &b.classes, l, &em.classes);
+            t::upload_packed(&ctx, &b, &b.classes, l, &em.classes);
         }
         t::run(&ctx, &rp, &b).unwrap();
         for (l, em) in ems.iter().enumerate() {
-            assert_eq!(t::download_level(&ctx, &b, &b.ruled, l).unwrap(), to_u32(&em.ruled), "{name} rules level {l}");
+            assert_eq!(t::download_packed(&ctx, &b, &b.ruled, l).unwrap(), to_u32(&em.ruled), "{name} rules level {l}");
         }
         let ruled: Vec<Plane<u8>> = ems.iter().map(|em| em.ruled.clone()).collect();
         check_hysteresis(&ctx, &hp, &b, &ruled, &name);

@@ -534,7 +534,7 @@ fn classify_matches_cpu() {
         t::upload(&ctx, &b.windows, &windows);
         t::run(&ctx, &pass, &b).unwrap();
         for (l, em) in cpu.iter().enumerate() {
-            assert_eq!(t::download_level(&ctx, &b, &b.classes, l).unwrap(), words(&em.classes), "{name} level {l}");
+            assert_eq!(t::download_packed(&ctx, &b, &b.classes, l).unwrap(), words(&em.classes), "{name} level {l}");
         }
     }
 }
@@ -562,7 +562,7 @@ fn classify_boundaries() {
             t::upload(&ctx, &b.windows, &win);
             t::upload(&ctx, &b.otsu, &[t1]);
             t::run(&ctx, &pass, &b).unwrap();
-            let got = t::download_level(&ctx, &b, &b.classes, 0).unwrap();
+            let got = t::download_packed(&ctx, &b, &b.classes, 0).unwrap();
             for (i, (&mv, &k)) in m.data.iter().zip(&keep.data).enumerate() {
                 let want = if t1 == 0 || k == 0 { NONE } else { cpu::classify::class_of(mv as u32, t1, v3, alpha_pct) };
                 assert_eq!(got[i], want as u32, "M {mv} T1 {t1} V3 {v3} alpha {alpha_pct}");
@@ -636,7 +636,7 @@ fn chained_front_matches_cpu_on_real_images() {
             let o = b.layout.window_offsets[l] as usize * 4;
             let want = window_words(em);
             assert_eq!(&windows[o..o + want.len()], &want[..], "{name} level {l}: windows");
-            let classes = t::download_level(&ctx, &b, &b.classes, l).unwrap();
+            let classes = t::download_packed(&ctx, &b, &b.classes, l).unwrap();
             assert_eq!(classes, words(&em.classes), "{name} level {l}: classes");
             strong += classes.iter().filter(|&&c| c == STRONG as u32).count();
         }

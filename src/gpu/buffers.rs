@@ -81,6 +81,8 @@ pub mod counter {
 pub struct Allocated {
     /// Pixels per atlas.
     pub px: u64,
+    /// Words per column-packed plane.
+    pub packed: u64,
     /// Keypoint slots.
     pub keypoints: u64,
     /// Windows.
@@ -103,6 +105,7 @@ impl Allocated {
         let sides: u64 = layout.sizes.iter().map(|&(w, h)| w as u64 + h as u64).sum();
         Self {
             px: layout.total_px_exact,
+            packed: layout.total_packed as u64,
             keypoints: layout.capacity as u64,
             windows: levels * per_level,
             // xs, ys, then per level a cell header and at most 2 cuts per window and 2 more per axis
@@ -117,6 +120,7 @@ impl Allocated {
     /// True when every buffer allocated for `self` is large enough for `other`.
     pub fn holds(&self, other: &Allocated) -> bool {
         self.px >= other.px
+            && self.packed >= other.packed
             && self.keypoints >= other.keypoints
             && self.windows >= other.windows
             && self.grid >= other.grid
@@ -174,9 +178,10 @@ pub struct Buffers {
     pub windows: wgpu::Buffer,
     /// Per window a 256-bin histogram of M8, summed from its cells (SPEC 5).
     pub window_hist: wgpu::Buffer,
-    /// SPEC 6 classes.
+    /// SPEC 6 classes, column-packed (four rows of a column per word, see
+    /// [`FrameLayout::packed_offsets`](super::FrameLayout::packed_offsets)).
     pub classes: wgpu::Buffer,
-    /// Classes after rules 1 and 2.
+    /// Classes after rules 1 and 2, column-packed as `classes`.
     pub ruled: wgpu::Buffer,
     /// Union-find labels (hysteresis).
     pub labels: wgpu::Buffer,
@@ -329,8 +334,8 @@ impl Buffers {
             grid: init("grid", bytemuck::cast_slice(&grid), storage),
             windows: buf("windows", 16 * allocated.windows),
             window_hist: buf("window_hist", window_hist_bytes),
-            classes: px("classes"),
-            ruled: px("ruled"),
+            classes: buf("classes", allocated.packed * 4),
+            ruled: buf("ruled", allocated.packed * 4),
             labels: px("labels"),
             flags: px("flags"),
             edges: px("edges"),

@@ -28,7 +28,8 @@ pub struct Params {
     pub scales: [[f32; 4]; MAX_LEVELS],
     /// Per-level quotas of `n_features`, four per row.
     pub quotas: [[u32; 4]; MAX_LEVELS / 4],
-    /// Per level: first tile in the tile list, tiles along x, along y, 0.
+    /// Per level: first tile in the tile list, tiles along x, along y, and
+    /// the level's word offset in a column-packed plane ([`FrameLayout::packed_offsets`]).
     pub tiles: [[u32; 4]; MAX_LEVELS],
     /// Number of levels.
     pub n_levels: u32,
@@ -84,6 +85,12 @@ pub struct FrameLayout {
     pub total_px: u32,
     /// Pixels of all levels, not saturated: the GPU path refuses layouts over `u32::MAX`.
     pub total_px_exact: u64,
+    /// Word offset of each level in a *column-packed* 8-bit plane (`classes`,
+    /// `ruled`): word `(y / 4) * w + x` of level l holds rows `4 (y / 4) ..+ 4`
+    /// of column x, row y in bits `8 (y % 4)..`; see [`pack_level`].
+    pub packed_offsets: Vec<u32>,
+    /// Words of a column-packed plane over all levels (`sum w * ceil(h / 4)`).
+    pub total_packed: u32,
     /// Per level window grid.
     pub grids: Vec<WindowLayout>,
     /// Index of each level's first window in the window-statistics buffer.
@@ -109,10 +116,14 @@ impl FrameLayout {
     pub fn new(cfg: &Config, width: u32, height: u32) -> Self {
         let sizes = cfg.level_sizes(width, height);
         let mut offsets = Vec::with_capacity(sizes.len());
+        let mut packed_offsets = Vec::with_capacity(sizes.len());
         let mut total: u64 = 0;
+        let mut total_packed: u64 = 0;
         for &(w, h) in &sizes {
             offsets.push(total.min(u32::MAX as u64) as u32);
+            packed_offsets.push(total_packed.min(u32::MAX as u64) as u32);
             total += w as u64 * h as u64;
+            total_packed += w as u64 * h.div_ceil(4) as u64;
         }
         let mut grids = Vec::new();
         let mut window_offsets = Vec::new();
@@ -126,7 +137,7 @@ impl FrameLayout {
             let (a, bb) = (g.a, g.b);
             p.levels[l] = [w, h, offsets[l], total_windows];
             let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
-            p.tiles[l] = [p.total_tiles, tx, ty, 0];
+            p.tiles[l] = [p.total_tiles, tx, ty, packed_offsets[l]];
             p.total_tiles = p.total_tiles.saturating_add(tx.saturating_mul(ty));
             debug_assert!(g.xs.len() <= MAX_WINDOWS_PER_AXIS && g.ys.len() <= MAX_WINDOWS_PER_AXIS);
             p.grids[l] = [g.xs.len() as u32, g.ys.len() as u32, grid_data.len() as u32, a | (bb << 16)];
@@ -189,6 +200,8 @@ impl FrameLayout {
             offsets,
             total_px: total.min(u32::MAX as u64) as u32,
             total_px_exact: total,
+            packed_offsets,
+            total_packed: total_packed.min(u32::MAX as u64) as u32,
             grids,
             window_offsets,
             total_windows,
@@ -244,12 +257,49 @@ impl FrameLayout {
         o..o + (w * h) as usize
     }
 
+    /// Range of level `l` in a column-packed plane, in words.
+    pub fn packed_range(&self, l: usize) -> std::ops::Range<usize> {
+        let (w, h) = self.sizes[l];
+        let o = self.packed_offsets[l] as usize;
+        o..o + (w * h.div_ceil(4)) as usize
+    }
+
     /// Most windows of any level along x and y.
     pub fn max_windows(&self) -> (u32, u32) {
         let nx = self.grids.iter().map(|g| g.xs.len() as u32).max().unwrap_or(0);
         let ny = self.grids.iter().map(|g| g.ys.len() as u32).max().unwrap_or(0);
         (nx, ny)
     }
+}
+
+/// A `w x h` level of 8-bit values (row-major, `w * h` of them) as the
+/// words of a column-packed plane ([`FrameLayout::packed_offsets`]): four rows
+/// of a column per word, so a column walk reads a word per four rows. Rows
+/// past `h` in the last word are 0.
+///
+/// ```
+/// use lfast::gpu::layout::{pack_level, unpack_level};
+/// // 2 x 5: column 0 holds 1, 3, 5, 7, 9 and column 1 holds 2, 4, 6, 8, 10
+/// let v: Vec<u8> = (1..=10).collect();
+/// let words = pack_level(2, 5, &v);
+/// assert_eq!(words, vec![0x0705_0301, 0x0806_0402, 0x09, 0x0a]);
+/// assert_eq!(unpack_level(2, 5, &words), v);
+/// ```
+pub fn pack_level(w: u32, h: u32, v: &[u8]) -> Vec<u32> {
+    let (w, h) = (w as usize, h as usize);
+    let mut words = vec![0u32; w * h.div_ceil(4)];
+    for (y, row) in v.chunks_exact(w.max(1)).take(h).enumerate() {
+        for (x, &b) in row.iter().enumerate() {
+            words[(y / 4) * w + x] |= (b as u32) << (8 * (y % 4));
+        }
+    }
+    words
+}
+
+/// The inverse of [`pack_level`]: `w * h` values in row-major order.
+pub fn unpack_level(w: u32, h: u32, words: &[u32]) -> Vec<u8> {
+    let (w, h) = (w as usize, h as usize);
+    (0..w * h).map(|i| (words[(i / w / 4) * w + i % w] >> (8 * (i / w % 4))) as u8).collect()
 }
 
 #[cfg(test)]
