@@ -1,7 +1,7 @@
 // SPEC 7 rule 3: hysteresis. Mirrors src/cpu/hysteresis.rs: a pixel is an
 // edge (255) iff it is STRONG, or WEAK and joined to a STRONG pixel through
-// 8-connected WEAK pixels. `ruled` is column-packed (common.wgsl pk_word);
-// labels, flags and edges hold one u32 per pixel.
+// 8-connected WEAK pixels. `ruled` and `edges` are column-packed (common.wgsl
+// pk_word); labels and flags hold one u32 per pixel.
 //
 // The CPU floods each WEAK component that touches a STRONG pixel. Here the
 // same set comes from connected-component labelling of the active (WEAK or
@@ -158,12 +158,18 @@ fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) 
 fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
     var word = 0u;
+    var out = 0u;
     for (var y = c.y; y < c.z; y++) {
         if ((y & 3u) == 0u) { word = ruled[pk_word(c.w, c.x, y)]; }
         let i = loff(c.w) + y * lw(c.w) + c.x;
         var e = 0u;
         // after compress every active pixel's parent is its root
         if (is_active(pk_byte(word, y)) && atomicLoad(&flags[parent(i)]) == 1u) { e = EDGE; }
-        edges[i] = e;
+        // `edges` is column-packed as `ruled`
+        out |= pk_place(e, y);
+        if ((y & 3u) == 3u || y + 1u == c.z) {
+            edges[pk_word(c.w, c.x, y)] = out;
+            out = 0u;
+        }
     }
 }

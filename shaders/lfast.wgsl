@@ -18,8 +18,9 @@ const CIRCLE = array<vec2<i32>, 16>(
 
 // 1 iff (x, y) of level l is an edge. Callers stay >= 7 pixels inside p's
 // border, so no clamping is needed (as on the CPU).
+// `edges` is column-packed (common.wgsl pk_word).
 fn is_edge(l: u32, x: i32, y: i32) -> u32 {
-    return u32(edges[loff(l) + u32(y) * lw(l) + u32(x)] == EDGE);
+    return u32(pk_byte(edges[pk_word(l, u32(x), u32(y))], u32(y)) == EDGE);
 }
 
 // Step 4: does circle point t support the corner at p? q = 2t - p supports it
@@ -128,10 +129,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     // w - border) so nothing underflows.
     let b = max(P.border, 7u);
     let col = span.x >= b && span.x + b < w;
+    var word = 0u;
     for (var y = span.y; y < span.z; y++) {
+        // the column's packed word, once per four rows
+        if ((y & 3u) == 0u) { word = edges[pk_word(l, span.x, y)]; }
         let i = loff(l) + y * w + span.x;
         let tested = col && y >= b && y + b < h;
-        if (tested && edges[i] == EDGE && (P.use_mask == 0u || mask[i] != 0u)) {
+        if (tested && pk_byte(word, y) == EDGE && (P.use_mask == 0u || mask[i] != 0u)) {
             todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
         } else {
             cand[i] = 0u;

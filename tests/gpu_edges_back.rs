@@ -131,7 +131,7 @@ fn check_hysteresis(ctx: &GpuContext, pass: &HysteresisPass, b: &Buffers, planes
     t::run(ctx, pass, b).unwrap();
     for (l, p) in planes.iter().enumerate() {
         let want = to_u32(&hysteresis(p));
-        let got = t::download_level(ctx, b, &b.edges, l).unwrap();
+        let got = t::download_packed(ctx, b, &b.edges, l).unwrap();
         if got != want {
             let bad = got.iter().zip(&want).position(|(g, w)| g != w).unwrap_or(0);
             panic!(
@@ -172,7 +172,7 @@ fn check_lfast(
     poison(ctx, &b.cand, 1);
     poison(ctx, &b.mask, 0);
     for (l, e) in edges.iter().enumerate() {
-        t::upload_plane(ctx, b, &b.edges, l, e);
+        t::upload_packed(ctx, b, &b.edges, l, e);
         if let Some(m) = masks {
             t::upload_plane(ctx, b, &b.mask, l, &m[l]);
         }
@@ -339,7 +339,7 @@ fn rules_and_hysteresis_match_cpu_on_real_images() {
         let ruled: Vec<Plane<u8>> = ems.iter().map(|em| em.ruled.clone()).collect();
         check_hysteresis(&ctx, &hp, &b, &ruled, &name);
         for (l, em) in ems.iter().enumerate() {
-            assert_eq!(t::download_level(&ctx, &b, &b.edges, l).unwrap(), to_u32(&em.edges), "{name} edges level {l}");
+            assert_eq!(t::download_packed(&ctx, &b, &b.edges, l).unwrap(), to_u32(&em.edges), "{name} edges level {l}");
         }
         assert!(ems[0].edges.data.contains(&EDGE), "{name}: the test needs edges");
     }
@@ -368,7 +368,7 @@ fn hysteresis_literal_case() {
         0, 0, 0, 255, 0,
         0, 0, 255, 0, 255,
     ];
-    assert_eq!(t::download_level(&ctx, &b, &b.edges, 0).unwrap(), want);
+    assert_eq!(t::download_packed(&ctx, &b, &b.edges, 0).unwrap(), want);
 }
 
 #[test]
@@ -406,7 +406,7 @@ fn hysteresis_long_snakes_and_spirals() {
         let mut c = sp.clone();
         c.data[(end.1 * 128 + end.0) as usize] = STRONG;
         check_hysteresis(&ctx, &pass, &b, std::slice::from_ref(&c), &format!("spiral seeded at {end:?}"));
-        let e = t::download_level(&ctx, &b, &b.edges, 0).unwrap();
+        let e = t::download_packed(&ctx, &b, &b.edges, 0).unwrap();
         assert_eq!(e.iter().filter(|&&v| v == 255).count(), path.len(), "the whole spiral is one edge");
     }
     // unseeded: nothing
@@ -429,7 +429,7 @@ fn hysteresis_long_snakes_and_spirals() {
         planes.push(p);
     }
     check_hysteresis(&ctx, &pass, &b, &planes, "snake and spirals");
-    let e0 = t::download_level(&ctx, &b, &b.edges, 0).unwrap();
+    let e0 = t::download_packed(&ctx, &b, &b.edges, 0).unwrap();
     assert!(e0.iter().filter(|&&v| v == 255).count() > 14_000);
 
     // Two interleaved combs (one seeded, one not) whose teeth run across every
@@ -462,7 +462,7 @@ fn hysteresis_long_snakes_and_spirals() {
         planes.push(p);
     }
     check_hysteresis(&ctx, &pass, &b, &planes, "combs");
-    let e0 = t::download_level(&ctx, &b, &b.edges, 0).unwrap();
+    let e0 = t::download_packed(&ctx, &b, &b.edges, 0).unwrap();
     assert_eq!(e0[0], 0, "comb A is not seeded");
     assert_eq!(e0[((h - 1) * w) as usize], 255, "comb B is");
 }

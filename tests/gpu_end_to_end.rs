@@ -85,7 +85,7 @@ fn edge_maps_and_candidates_equal_the_cpu_on_every_level() {
             let em = lfast::cpu::edge_map(lv, &cfg);
             let e: Vec<u32> = em.edges.data.iter().map(|&v| v as u32).collect();
             assert_eq!(
-                t::download_level(&ctx, &w.buffers, &w.buffers.edges, l).unwrap(),
+                t::download_packed(&ctx, &w.buffers, &w.buffers.edges, l).unwrap(),
                 e,
                 "{name}: edges of level {l}"
             );

@@ -187,7 +187,7 @@ pub struct Buffers {
     pub labels: wgpu::Buffer,
     /// Per root: 1 if its component holds a STRONG pixel (hysteresis).
     pub flags: wgpu::Buffer,
-    /// E: 255 = edge.
+    /// E: 255 = edge, column-packed as `classes`.
     pub edges: wgpu::Buffer,
     /// L-FAST candidates (0/1).
     pub cand: wgpu::Buffer,
@@ -338,7 +338,7 @@ impl Buffers {
             ruled: buf("ruled", allocated.packed * 4),
             labels: px("labels"),
             flags: px("flags"),
-            edges: px("edges"),
+            edges: buf("edges", allocated.packed * 4),
             cand: px("cand"),
             resp: px("resp"),
             corners: buf("corners", cap * KP_WORDS * 4),

@@ -359,9 +359,10 @@ impl GpuDetector {
         self.encode(&mut enc, GpuInput::Written, ws)?;
         self.ctx.queue.submit([enc.finish()]);
         let (w, h) = ws.buffers.size();
-        let words = self.ctx.read_range(&ws.buffers.edges, 0, w as u64 * h as u64 * 4)?;
-        let data: Vec<u8> = bytemuck::cast_slice::<u8, u32>(&words).iter().map(|&v| v as u8).collect();
-        Plane::from_vec(w, h, data)
+        // E is column-packed (level 0 first): a quarter of a u32 plane to read
+        let words = ws.buffers.layout.packed_range(0).len() as u64;
+        let bytes = self.ctx.read_range(&ws.buffers.edges, 0, words * 4)?;
+        Plane::from_vec(w, h, super::layout::unpack_level(w, h, bytemuck::cast_slice(&bytes)))
     }
 
     /// Reads any buffer of the workspace back (blocking; for debugging and the
