@@ -9,6 +9,9 @@
 @group(0) @binding(4) var<storage, read_write> s: array<u32>;
 @group(0) @binding(5) var<storage, read_write> m: array<u32>;
 
+// D at (x, y) of level l (column-packed, common.wgsl pk_word).
+fn dval(l: u32, x: u32, y: u32) -> i32 { return i32(pk_byte(denoised[pk_word(l, x, y)], y)); }
+
 // A column pass (tile_column): rows y and y + 1 of columns x and x + 1 walk
 // down in registers (two reads per pixel instead of four). Right and bottom
 // reads clamp (x, y themselves are inside).
@@ -22,12 +25,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let x = span.x;
     let xr = min(x + 1u, w - 1u);
     var row = loff(l) + span.y * w;
-    var a = i32(denoised[row + x]);   // (x, y)
-    var b = i32(denoised[row + xr]);  // (x+1, y)
+    var a = dval(l, x, span.y);   // (x, y)
+    var b = dval(l, xr, span.y);  // (x+1, y)
     for (var y = span.y; y < span.z; y++) {
-        let below = loff(l) + min(y + 1u, h - 1u) * w;
-        let c = i32(denoised[below + x]);   // (x, y+1)
-        let e = i32(denoised[below + xr]);  // (x+1, y+1)
+        let yb = min(y + 1u, h - 1u);
+        let c = dval(l, x, yb);   // (x, y+1)
+        let e = dval(l, xr, yb);  // (x+1, y+1)
         let dx = b + e - a - c;
         let dy = c + e - a - b;
         let sq = u32(dx * dx + dy * dy);

@@ -13,17 +13,25 @@
 @group(0) @binding(3) var<storage, read_write> nms: array<u32>;
 @group(0) @binding(4) var<storage, read_write> hist: array<atomic<u32>>;
 
-// D at columns x-1, x, x+1, x+2 of row y (clamped into the level; x-1 only
-// feeds S at x-1, which is 0 at x = 0 whatever it reads).
-fn d4(l: u32, x: u32, y: u32) -> vec4<i32> {
-    let row = loff(l) + min(y, lh(l) - 1u) * lw(l);
-    let last = lw(l) - 1u;
-    return vec4<i32>(
-        i32(denoised[row + max(x, 1u) - 1u]),
-        i32(denoised[row + x]),
-        i32(denoised[row + min(x + 1u, last)]),
-        i32(denoised[row + min(x + 2u, last)]),
-    );
+// D is column-packed (common.wgsl pk_word). D at columns x-1, x, x+1, x+2 of
+// row y clamped into the level (x-1 only feeds S at x-1, which is 0 at x = 0
+// whatever it reads, x+1 and x+2 clamp to the last column), from the four
+// columns' words of the row's group of four, which `cw` caches for group `cg`:
+// the walk asks for rows in order, so each word is read once.
+fn d4(l: u32, x: u32, y: u32, cg: ptr<function, u32>, cw: ptr<function, vec4<u32>>) -> vec4<i32> {
+    let yc = min(y, lh(l) - 1u);
+    if ((yc >> 2u) != *cg) {
+        let row = pk_word(l, 0u, yc);
+        let last = lw(l) - 1u;
+        *cw = vec4<u32>(
+            denoised[row + max(x, 1u) - 1u],
+            denoised[row + x],
+            denoised[row + min(x + 1u, last)],
+            denoised[row + min(x + 2u, last)],
+        );
+        *cg = yc >> 2u;
+    }
+    return vec4<i32>((*cw >> vec4<u32>((yc & 3u) * 8u)) & vec4<u32>(0xffu));
 }
 
 // (gx2, gy2) at columns x-1, x, x+1 from D rows y (a) and y + 1 (c): SPEC 2's
@@ -46,8 +54,8 @@ fn s3(g: array<vec2<i32>, 3>, valid: vec3<bool>) -> vec3<u32> {
 
 // A column pass (tile_column): the invocation of column x walks its rows with
 // D of columns x-1..x+2 and S of columns x-1..x+1 in registers (rows y-1, y,
-// y+1), four reads and two writes per pixel; runs of equal M8 are counted
-// locally (histogram_bins.wgsl, appended to this shader).
+// y+1): four packed words per four rows (d4) and two writes per pixel; runs
+// of equal M8 are counted locally (histogram_bins.wgsl, appended to this shader).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
@@ -60,17 +68,21 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         let cols = vec3<bool>(x > 0u, true, x + 1u < lw(l));
         let none = vec3<bool>(false);
         // S of row y0 - 1 (none above row 0), gradients and S of row y0
-        var dcur = d4(l, x, span.y);
-        var dnext = d4(l, x, span.y + 1u);
+        var cg = 0xffffffffu;
+        var cw = vec4<u32>(0u);
         var up = vec3<u32>(0u);
         if (span.y > 0u) {
-            up = s3(grad3(d4(l, x, span.y - 1u), dcur), cols);
+            // row y0 - 1 is the last of the group before (read once, then the walk's)
+            let dup = d4(l, x, span.y - 1u, &cg, &cw);
+            up = s3(grad3(dup, d4(l, x, span.y, &cg, &cw)), cols);
         }
+        var dcur = d4(l, x, span.y, &cg, &cw);
+        var dnext = d4(l, x, span.y + 1u, &cg, &cw);
         var g = grad3(dcur, dnext);
         var mid = s3(g, cols);
         for (var y = span.y; y < span.z; y++) {
             // row y + 1: its S (0 below the last row) and, next time, its gradients
-            let dnn = d4(l, x, y + 2u);
+            let dnn = d4(l, x, y + 2u, &cg, &cw);
             let gn = grad3(dnext, dnn);
             let down = s3(gn, select(none, cols, y + 1u < h));
             let v = mid.y;

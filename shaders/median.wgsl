@@ -73,11 +73,17 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let xr = min(x + 1u, w - 1u);
     var a = row3(base + select(span.y - 1u, 0u, span.y == 0u) * w, xl, x, xr);
     var b = row3(base + span.y * w, xl, x, xr);
+    // `dst` (D) is column-packed (common.wgsl pk_word): a word per four rows
+    var word = 0u;
     for (var y = span.y; y < span.z; y++) {
         let c = row3(base + min(y + 1u, h - 1u) * w, xl, x, xr);
         var v = b.y;
         if (is_noise(v, vec4<u32>(a.y, c.y, b.x, b.z))) { v = median9(a, b, c); }
-        dst[base + y * w + x] = v;
+        word |= pk_place(v, y);
+        if ((y & 3u) == 3u || y + 1u == span.z) {
+            dst[pk_word(l, x, y)] = word;
+            word = 0u;
+        }
         a = b;
         b = c;
     }

@@ -70,7 +70,12 @@ fn harris_from_sums(ai: i32, bi: i32, ci: i32) -> f32 {
     return e * scale_sq_sq;
 }
 
-fn px(l: u32, x: i32, y: i32) -> i32 { return i32(denoised[clamped(l, x, y)]); }
+fn px(l: u32, x: i32, y: i32) -> i32 {
+    // D is column-packed (common.wgsl pk_word); coordinates clamped as `clamped`
+    let cx = u32(clamp(x, 0, i32(lw(l)) - 1));
+    let cy = u32(clamp(y, 0, i32(lh(l)) - 1));
+    return i32(pk_byte(denoised[pk_word(l, cx, cy)], cy));
+}
 
 // The integer structure-tensor sums (a, b, c) = (ΣIx², ΣIy², ΣIxIy) over the
 // 7x7 block centred on (x, y), reads clamped, as structure_sums. The 9x9

@@ -104,7 +104,7 @@ fn gradient_matches_cpu() {
             poison(&ctx, buf);
         }
         for (l, em) in cpu.iter().enumerate() {
-            t::upload_plane(&ctx, &b, &b.denoised, l, &em.denoised);
+            t::upload_packed(&ctx, &b, &b.denoised, l, &em.denoised);
         }
         t::run(&ctx, &pass, &b).unwrap();
         for (l, em) in cpu.iter().enumerate() {
@@ -128,7 +128,7 @@ fn gradient_extremes() {
     {
         let d = Plane::from_vec(2, 2, d.to_vec()).unwrap();
         let b = Buffers::with_stage_planes(&ctx.device, &cfg, 2, 2).unwrap();
-        t::upload_plane(&ctx, &b, &b.denoised, 0, &d);
+        t::upload_packed(&ctx, &b, &b.denoised, 0, &d);
         t::run(&ctx, &pass, &b).unwrap();
         let g = cpu::gradient::gradient(&d);
         assert_eq!(t::download_level(&ctx, &b, &st(&b).gx, 0).unwrap(), words(&g.gx2), "{:?}", d.data);
@@ -160,7 +160,7 @@ fn gradient_matches_cpu_on_noise() {
     )
     .unwrap();
     let b = Buffers::with_stage_planes(&ctx.device, &cfg, w, h).unwrap();
-    t::upload_plane(&ctx, &b, &b.denoised, 0, &d);
+    t::upload_packed(&ctx, &b, &b.denoised, 0, &d);
     t::run(&ctx, &pass, &b).unwrap();
     let g = cpu::gradient::gradient(&d);
     for v in [-510, 510] {
@@ -278,7 +278,7 @@ fn gradient_nms_matches_cpu() {
             poison(&ctx, buf);
         }
         for (l, (d, ..)) in want.iter().enumerate() {
-            t::upload_plane(&ctx, &b, &b.denoised, l, d);
+            t::upload_packed(&ctx, &b, &b.denoised, l, d);
         }
         t::run(&ctx, &pass, &b).unwrap();
         let hist = t::download(&ctx, &b.hist).unwrap();
@@ -624,7 +624,7 @@ fn chained_front_matches_cpu_on_real_images() {
             poison(&ctx, buf);
         }
         for (l, em) in cpu.iter().enumerate() {
-            t::upload_plane(&ctx, &b, &b.denoised, l, &em.denoised);
+            t::upload_packed(&ctx, &b, &b.denoised, l, &em.denoised);
         }
         run_front(&ctx, &b);
         let otsu = t::download(&ctx, &b.otsu).unwrap();

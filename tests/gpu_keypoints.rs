@@ -119,7 +119,7 @@ fn response_matches_cpu_on_real_candidates() {
         let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
         let levels = cpu_levels(&cfg, &img);
         for (l, lv) in levels.iter().enumerate() {
-            t::upload_plane(&ctx, &b, &b.denoised, l, &lv.denoised);
+            t::upload_packed(&ctx, &b, &b.denoised, l, &lv.denoised);
             t::upload_level(&ctx, &b, &b.cand, l, &cand_map(lv.denoised.width, lv.denoised.height, &lv.cands));
         }
         t::run(&ctx, &pass, &b).unwrap();
@@ -165,7 +165,7 @@ fn response_matches_cpu_at_every_pixel() {
         let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
         let lv = t::cpu_levels(&cfg, img);
         for (l, p) in lv.iter().enumerate() {
-            t::upload_plane(&ctx, &b, &b.denoised, l, p);
+            t::upload_packed(&ctx, &b, &b.denoised, l, p);
             t::upload_level(&ctx, &b, &b.cand, l, &vec![1; p.len()]);
         }
         t::run(&ctx, &pass, &b).unwrap();
@@ -466,7 +466,7 @@ fn response_nms_select_chain_matches_cpu() {
             let mut per_level = Vec::new();
             for (l, lv) in levels.iter().enumerate() {
                 let (w, h) = (lv.denoised.width, lv.denoised.height);
-                t::upload_plane(&ctx, &b, &b.denoised, l, &lv.denoised);
+                t::upload_packed(&ctx, &b, &b.denoised, l, &lv.denoised);
                 t::upload_level(&ctx, &b, &b.cand, l, &cand_map(w, h, &lv.cands));
                 let keep = corner_nms::corner_nms(w, h, &lv.cands, &lv.resp, cfg.nms_radius);
                 per_level.push(

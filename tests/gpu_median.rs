@@ -17,7 +17,7 @@ fn median_matches_cpu_on_every_level() {
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in lv.iter().enumerate() {
             let want: Vec<u32> = median::median(p, cfg.delta_num(), 10_000).data.iter().map(|&v| v as u32).collect();
-            assert_eq!(t::download_level(&ctx, &b, &b.denoised, l).unwrap(), want, "{w}x{h} level {l}");
+            assert_eq!(t::download_packed(&ctx, &b, &b.denoised, l).unwrap(), want, "{w}x{h} level {l}");
         }
     }
 }

@@ -160,7 +160,7 @@ pub struct Buffers {
     pub gray: wgpu::Buffer,
     /// Level masks (nonzero = on), read when `Params::use_mask` is 1.
     pub mask: wgpu::Buffer,
-    /// D (SPEC 1).
+    /// D (SPEC 1), column-packed as `classes`.
     pub denoised: wgpu::Buffer,
     /// gx2, gy2 and S: allocated only by [`Buffers::with_stage_planes`].
     pub stage: Option<StagePlanes>,
@@ -325,7 +325,7 @@ impl Buffers {
             input: buf("input", (width as u64 * height as u64).next_multiple_of(4)),
             gray: px("gray"),
             mask: px("mask"),
-            denoised: px("denoised"),
+            denoised: buf("denoised", allocated.packed * 4),
             stage: stage_planes.then(|| StagePlanes { gx: px("gx"), gy: px("gy"), s: px("s") }),
             m: px("m"),
             nms: px("nms"),
