@@ -50,11 +50,14 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let g = P.grids[l];
     let i = grid[g.z + g.x + g.y + span.x];
     // `classes` is column-packed: four rows to a word, written when complete
+    // `nms` is column-packed too: its word is read once per four rows
     var word = 0u;
+    var flags = 0u;
     for (var y = span.y; y < span.z; y++) {
+        if ((y & 3u) == 0u) { flags = nms[pk_word(l, span.x, y)]; }
         let p = loff(l) + y * lw(l) + span.x;
         var c = NONE;
-        if (t1 != 0u && nms[p] != 0u) {
+        if (t1 != 0u && pk_byte(flags, y) != 0u) {
             let j = grid[g.z + g.x + g.y + lw(l) + y];
             let v3 = windows[(P.levels[l].w + j * g.x + i) * 4u + 3u];
             c = class_of(m[p], t1, v3, P.alpha_pct);

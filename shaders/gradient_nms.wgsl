@@ -3,7 +3,7 @@
 // histogram.wgsl (which mirror src/cpu/gradient.rs, nms.rs, histogram.rs), and
 // to the CPU's fused rows (src/cpu/fused.rs, `gradient_row` and the NMS inside
 // `classify_row`), without the gx, gy and S planes: those live only in registers.
-// denoised -> m (M), nms (1 = survivor), hist[l * 256 + M8]; all levels in one
+// denoised -> m (M), nms (1 = survivor; column-packed), hist[l * 256 + M8]; all levels in one
 // dispatch (over the tile list). `hist` is cleared by the pass before this runs.
 // Tests: tests/gpu_edges_front.rs (this pass == the three staged passes and the
 // CPU) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -80,6 +80,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         var dnext = d4(l, x, span.y + 1u, &cg, &cw);
         var g = grad3(dcur, dnext);
         var mid = s3(g, cols);
+        var flags = 0u;
         for (var y = span.y; y < span.z; y++) {
             // row y + 1: its S (0 below the last row) and, next time, its gradients
             let dnn = d4(l, x, y + 2u, &cg, &cw);
@@ -97,7 +98,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             let i = loff(l) + y * lw(l) + x;
             let mv = magnitude(v);
             m[i] = mv;
-            nms[i] = keep;
+            // `nms` is column-packed: a word per four rows
+            flags |= pk_place(keep, y);
+            if ((y & 3u) == 3u || y + 1u == span.z) {
+                nms[pk_word(l, x, y)] = flags;
+                flags = 0u;
+            }
             count_m8(&run, sub, min(mv, 255u));
             up = mid;
             mid = down;

@@ -1,6 +1,6 @@
 // SPEC 3: non-maximum suppression across the gradient direction, with the
 // direction sector found by integer tests. Mirrors src/cpu/nms.rs.
-// gx, gy, s -> nms (1 = survivor, 0 otherwise). A column pass, all levels in
+// gx, gy, s -> nms (1 = survivor, 0 otherwise; column-packed, common.wgsl pk_word). A column pass, all levels in
 // one dispatch (over the tile list).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/nms.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
@@ -21,6 +21,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let span = column_span(wg, li);
     let l = span.w;
     let x = i32(span.x);
+    // `nms` is column-packed (common.wgsl pk_word): a word per four rows
+    var word = 0u;
     for (var yy = span.y; yy < span.z; yy++) {
         let y = i32(yy);
         let i = loff(l) + yy * lw(l) + span.x;
@@ -30,6 +32,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             let o = sector(gx[i], gy[i]);
             keep = select(0u, 1u, v > s_or_zero(l, x + o.x, y + o.y) && v >= s_or_zero(l, x + o.z, y + o.w));
         }
-        nms[i] = keep;
+        word |= pk_place(keep, yy);
+        if ((yy & 3u) == 3u || yy + 1u == span.z) {
+            nms[pk_word(l, span.x, yy)] = word;
+            word = 0u;
+        }
     }
 }

@@ -187,7 +187,7 @@ fn nms_matches_cpu() {
         }
         t::run(&ctx, &pass, &b).unwrap();
         for (l, em) in cpu.iter().enumerate() {
-            assert_eq!(t::download_level(&ctx, &b, &b.nms, l).unwrap(), words(&em.nms), "{name} level {l}");
+            assert_eq!(t::download_packed(&ctx, &b, &b.nms, l).unwrap(), words(&em.nms), "{name} level {l}");
         }
     }
 }
@@ -224,7 +224,7 @@ fn nms_sector_boundaries_and_ties() {
     t::run(&ctx, &pass, &b).unwrap();
     let want = cpu::nms::nms(&g);
     assert!(want.data.contains(&1));
-    assert_eq!(t::download_level(&ctx, &b, &b.nms, 0).unwrap(), words(&want));
+    assert_eq!(t::download_packed(&ctx, &b, &b.nms, 0).unwrap(), words(&want));
 }
 
 #[test]
@@ -284,7 +284,7 @@ fn gradient_nms_matches_cpu() {
         let hist = t::download(&ctx, &b.hist).unwrap();
         for (l, (_, m, nms, h)) in want.iter().enumerate() {
             assert_eq!(t::download_level(&ctx, &b, &b.m, l).unwrap(), words(m), "M {name} level {l}");
-            assert_eq!(t::download_level(&ctx, &b, &b.nms, l).unwrap(), words(nms), "nms {name} level {l}");
+            assert_eq!(t::download_packed(&ctx, &b, &b.nms, l).unwrap(), words(nms), "nms {name} level {l}");
             assert_eq!(&hist[l * 256..][..256], &h[..], "hist {name} level {l}");
         }
     }
@@ -526,7 +526,7 @@ fn classify_matches_cpu() {
         let mut otsu = Vec::new();
         for (l, em) in cpu.iter().enumerate() {
             t::upload_plane(&ctx, &b, &b.m, l, &em.gradient.m);
-            t::upload_plane(&ctx, &b, &b.nms, l, &em.nms);
+            t::upload_packed(&ctx, &b, &b.nms, l, &em.nms);
             otsu.push(t1_word(em));
             windows.extend(window_words(em));
         }
@@ -553,7 +553,7 @@ fn classify_boundaries() {
         let m = Plane::<u16>::from_vec(w, h, (0..w * h).map(|i| (i % w) as u16).collect()).unwrap();
         let keep = Plane::<u8>::from_vec(w, h, (0..w * h).map(|i| (i % 5 != 4) as u8).collect()).unwrap();
         t::upload_plane(&ctx, &b, &b.m, 0, &m);
-        t::upload_plane(&ctx, &b, &b.nms, 0, &keep);
+        t::upload_packed(&ctx, &b, &b.nms, 0, &keep);
         let n_windows = b.layout.total_windows as usize;
         for (t1, v3) in [(41u32, 100u32), (31, 60), (300, 765), (1, 0), (256, 3), (0, 100)] {
             // The pass reads only V3 of a window: write it directly (min, max
@@ -631,7 +631,7 @@ fn chained_front_matches_cpu_on_real_images() {
         let windows = t::download(&ctx, &b.windows).unwrap();
         let mut strong = 0;
         for (l, em) in cpu.iter().enumerate() {
-            assert_eq!(t::download_level(&ctx, &b, &b.nms, l).unwrap(), words(&em.nms), "{name} level {l}: nms");
+            assert_eq!(t::download_packed(&ctx, &b, &b.nms, l).unwrap(), words(&em.nms), "{name} level {l}: nms");
             assert_eq!(otsu[l], t1_word(em), "{name} level {l}: T1");
             let o = b.layout.window_offsets[l] as usize * 4;
             let want = window_words(em);

@@ -166,7 +166,7 @@ pub struct Buffers {
     pub stage: Option<StagePlanes>,
     /// M.
     pub m: wgpu::Buffer,
-    /// NMS survivors (0/1).
+    /// NMS survivors (0/1), column-packed as `classes`.
     pub nms: wgpu::Buffer,
     /// 256 bins per level.
     pub hist: wgpu::Buffer,
@@ -328,7 +328,7 @@ impl Buffers {
             denoised: buf("denoised", allocated.packed * 4),
             stage: stage_planes.then(|| StagePlanes { gx: px("gx"), gy: px("gy"), s: px("s") }),
             m: px("m"),
-            nms: px("nms"),
+            nms: buf("nms", allocated.packed * 4),
             hist: buf("hist", 256 * 4 * n_levels),
             otsu: buf("otsu", 4 * n_levels),
             grid: init("grid", bytemuck::cast_slice(&grid), storage),
