@@ -63,7 +63,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             c = class_of(m[p], t1, v3, P.alpha_pct);
         }
         word |= pk_place(c, y);
-        if ((y & 3u) == 3u || y + 1u == span.z) {
+        if (pk_complete(y, span.z)) {
             classes[pk_word(l, span.x, y)] = word;
             word = 0u;
         }

@@ -117,6 +117,9 @@ fn pk_word(l: u32, x: u32, y: u32) -> u32 { return P.tiles[l].w + (y >> 2u) * lw
 fn pk_byte(word: u32, y: u32) -> u32 { return (word >> ((y & 3u) * 8u)) & 0xffu; }
 // Row y's value v in its place of a word being built (OR the four rows together).
 fn pk_place(v: u32, y: u32) -> u32 { return v << ((y & 3u) * 8u); }
+// Whether row y completes the word being built by a walk that ends before row
+// `end`: the last of its four rows, or the walk's last row.
+fn pk_complete(y: u32, end: u32) -> bool { return (y & 3u) == 3u || y + 1u == end; }
 
 // Work lists of column passes (lfast, response, corner_nms): an entry names
 // the pixel `row` rows below the top of lane `lane`'s column.

@@ -100,7 +100,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             m[i] = mv;
             // `nms` is column-packed: a word per four rows
             flags |= pk_place(keep, y);
-            if ((y & 3u) == 3u || y + 1u == span.z) {
+            if (pk_complete(y, span.z)) {
                 nms[pk_word(l, x, y)] = flags;
                 flags = 0u;
             }

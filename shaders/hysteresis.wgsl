@@ -167,7 +167,7 @@ fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_i
         if (is_active(pk_byte(word, y)) && atomicLoad(&flags[parent(i)]) == 1u) { e = EDGE; }
         // `edges` is column-packed as `ruled`
         out |= pk_place(e, y);
-        if ((y & 3u) == 3u || y + 1u == c.z) {
+        if (pk_complete(y, c.z)) {
             edges[pk_word(c.w, c.x, y)] = out;
             out = 0u;
         }

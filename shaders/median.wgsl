@@ -80,7 +80,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         var v = b.y;
         if (is_noise(v, vec4<u32>(a.y, c.y, b.x, b.z))) { v = median9(a, b, c); }
         word |= pk_place(v, y);
-        if ((y & 3u) == 3u || y + 1u == span.z) {
+        if (pk_complete(y, span.z)) {
             dst[pk_word(l, x, y)] = word;
             word = 0u;
         }

@@ -33,7 +33,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             keep = select(0u, 1u, v > s_or_zero(l, x + o.x, y + o.y) && v >= s_or_zero(l, x + o.z, y + o.w));
         }
         word |= pk_place(keep, yy);
-        if ((yy & 3u) == 3u || yy + 1u == span.z) {
+        if (pk_complete(yy, span.z)) {
             nms[pk_word(l, span.x, yy)] = word;
             word = 0u;
         }

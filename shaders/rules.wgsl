@@ -68,7 +68,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         if (((y + 1) & 3) == 0) { wd = words3(l, x, y + 1); }
         let c = row3(wd, y + 1);
         word |= pk_place(rule_at(a, b, c), u32(y));
-        if ((y & 3) == 3 || y + 1 == i32(span.z)) {
+        if (pk_complete(u32(y), span.z)) {
             ruled[pk_word(l, x, u32(y))] = word;
             word = 0u;
         }

@@ -104,6 +104,18 @@ pub fn for_each_branch(mask: u32, mut f: impl FnMut(usize, usize)) {
     }
 }
 
+/// The circle index a branch `(start, len)` stands for (SPEC 8): its middle
+/// pixel, the lower of the two middles of an even run.
+///
+/// ```
+/// assert_eq!(lfast::cpu::lfast::branch_mid(14, 4), 15); // 14, 15, 0, 1
+/// assert_eq!(lfast::cpu::lfast::branch_mid(15, 3), 0); // 15, 0, 1
+/// ```
+#[inline]
+pub fn branch_mid(start: usize, len: usize) -> usize {
+    (start + (len - 1) / 2) % 16
+}
+
 /// The L-FAST decision for edge pixel p (SPEC 8). p must lie >= 7 pixels from every side.
 pub fn is_corner(e: &Plane<u8>, px: i32, py: i32, p: &LfastParams) -> bool {
     let mask = circle_mask(e, px, py);
@@ -140,7 +152,7 @@ pub fn is_corner(e: &Plane<u8>, px: i32, py: i32, p: &LfastParams) -> bool {
             let mut mids = [0usize; 8];
             let mut nb = 0;
             for_each_branch(mask, |s, len| {
-                mids[nb] = (s + (len - 1) / 2) % 16;
+                mids[nb] = branch_mid(s, len);
                 nb += 1;
             });
             let straight = |a: usize, b: usize| {

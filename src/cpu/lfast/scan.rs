@@ -112,7 +112,7 @@ pub(super) fn support_map_into(e: &Plane<u8>, support: u32, s: &mut Vec<u8>) {
 }
 
 /// Per circle mask, bit t set where t is the middle of one of its branches
-/// (the lower of the two middles of an even run; [`super::for_each_branch`]):
+/// ([`super::branch_mid`] of each of [`super::for_each_branch`]):
 /// 128 KiB, built once. Branch mode decides from it without a data-dependent
 /// loop or branch per pixel.
 fn branch_mids() -> &'static [u16; 65536] {
@@ -120,7 +120,7 @@ fn branch_mids() -> &'static [u16; 65536] {
     MIDS.get_or_init(|| {
         let mut t = Box::new([0u16; 65536]);
         for (mask, mids) in t.iter_mut().enumerate() {
-            super::for_each_branch(mask as u32, |s, len| *mids |= 1 << ((s + (len - 1) / 2) % 16));
+            super::for_each_branch(mask as u32, |s, len| *mids |= 1 << super::branch_mid(s, len));
         }
         t
     })
