@@ -2,7 +2,7 @@
 //! `gray` -> `blur_tmp` (horizontal) -> `smooth` (vertical), all levels per dispatch.
 
 use super::buffers::Buffers;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b, full_source};
+use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
 use super::pass::Pass;
 use crate::error::Result;
 
@@ -24,10 +24,7 @@ impl Pass for BlurPass {
     const NAME: &'static str = "blur";
 
     fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(Self::NAME),
-            source: wgpu::ShaderSource::Wgsl(full_source(SOURCE).into()),
-        });
+        let module = super::kernel::compile(device, Self::NAME, SOURCE);
         Self {
             horizontal: Kernel::from_module(device, "blur horizontal", &module, "horizontal", BINDINGS),
             vertical: Kernel::from_module(device, "blur vertical", &module, "vertical", BINDINGS),

@@ -6,7 +6,7 @@
 //! no iteration cap (the shader argues why).
 
 use super::buffers::Buffers;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b, full_source};
+use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
 use super::pass::Pass;
 use crate::error::Result;
 
@@ -42,10 +42,7 @@ impl Pass for HysteresisPass {
     const NAME: &'static str = "hysteresis";
 
     fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(Self::NAME),
-            source: wgpu::ShaderSource::Wgsl(full_source(SOURCE).into()),
-        });
+        let module = super::kernel::compile(device, Self::NAME, SOURCE);
         let kernels = ENTRIES
             .iter()
             .map(|e| Kernel::from_module(device, &format!("{}::{e}", Self::NAME), &module, e, BINDINGS))

@@ -49,6 +49,15 @@ pub fn full_source(stage_source: &str) -> String {
     format!("{COMMON}\n{stage_source}")
 }
 
+/// Compiles a stage shader (prelude + `stage_source`) into a module.
+/// Every pass compiles its shader through here: one place decides how.
+pub fn compile(device: &wgpu::Device, label: &str, stage_source: &str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(full_source(stage_source).into()),
+    })
+}
+
 /// A compute pipeline and the layout of its single bind group.
 #[derive(Debug)]
 pub struct Kernel {
@@ -69,11 +78,7 @@ impl Kernel {
         entry: &str,
         bindings: &'static [Binding],
     ) -> Self {
-        let source = full_source(stage_source);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
+        let module = compile(device, label, stage_source);
         Self::from_module(device, label, &module, entry, bindings)
     }
 

@@ -3,7 +3,7 @@
 //! added to the windows holding each cell) -> `windows` (min, max, median, V3).
 
 use super::buffers::Buffers;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b, full_source};
+use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
 use super::pass::Pass;
 use crate::error::Result;
 
@@ -30,10 +30,7 @@ impl Pass for LocalThresholdPass {
     const NAME: &'static str = "local_threshold";
 
     fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(Self::NAME),
-            source: wgpu::ShaderSource::Wgsl(full_source(SOURCE).into()),
-        });
+        let module = super::kernel::compile(device, Self::NAME, SOURCE);
         Self {
             cells: Kernel::from_module(device, "local_threshold cells", &module, "cells", BINDINGS),
             stats: Kernel::from_module(device, "local_threshold stats", &module, "stats", BINDINGS),

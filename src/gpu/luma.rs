@@ -4,7 +4,7 @@
 //! ([`LumaPass::bind_texture`], [`LumaPass::record_texture`]).
 
 use super::buffers::Buffers;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b, full_source};
+use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
 use super::pass::Pass;
 use crate::error::{Error, Result};
 
@@ -82,10 +82,7 @@ impl Pass for LumaPass {
     const NAME: &'static str = "luma";
 
     fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(Self::NAME),
-            source: wgpu::ShaderSource::Wgsl(full_source(SOURCE).into()),
-        });
+        let module = super::kernel::compile(device, Self::NAME, SOURCE);
         let kind = |v: u32| {
             super::kernel::init_buffer(
                 device,

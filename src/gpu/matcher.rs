@@ -13,7 +13,7 @@
 //! blocking convenience; embedders can record [`MatcherPass`] themselves.
 
 use super::context::GpuContext;
-use super::kernel::{Binding, Kernel, PARAMS, Slot, b, full_source, init_buffer};
+use super::kernel::{Binding, Kernel, PARAMS, Slot, b, init_buffer};
 use crate::error::{Error, Result};
 use crate::keypoint::Descriptor;
 use crate::spec::matching::{Match, MatchOptions, NO_INDEX};
@@ -194,10 +194,7 @@ impl MatcherPass {
 
     /// Compiles the module once, one pipeline per entry point.
     pub fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(Self::NAME),
-            source: wgpu::ShaderSource::Wgsl(full_source(SOURCE).into()),
-        });
+        let module = super::kernel::compile(device, Self::NAME, SOURCE);
         let k = |entry: &str| Kernel::from_module(device, &format!("matcher {entry}"), &module, entry, BINDINGS);
         Self { forward: k("forward"), backward: k("backward"), combine: k("combine") }
     }

@@ -68,10 +68,7 @@ impl Pass for SelectPass {
     const NAME: &'static str = "select";
 
     fn new(device: &wgpu::Device) -> Self {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(Self::NAME),
-            source: wgpu::ShaderSource::Wgsl(super::kernel::full_source(SOURCE).into()),
-        });
+        let module = super::kernel::compile(device, Self::NAME, SOURCE);
         let k =
             |entry: &str, bindings| Kernel::from_module(device, &format!("select::{entry}"), &module, entry, bindings);
         Self {
