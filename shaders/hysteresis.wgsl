@@ -16,7 +16,8 @@
 // each a column pass over every level (one invocation per column of a tile,
 // see tile_column), in this order:
 //   merge        union of each active pixel with its active left, up-left,
-//                up and up-right neighbours (the other four see it as theirs)
+//                up and up-right neighbours (the other four see it as theirs),
+//                as few of them as keep the components (see merge)
 //   compress     labels[i] = root of i, and flags[root] = 1 for every STRONG
 //                pixel (`flags` is cleared by the pass's prepare)
 //   final_edges  edges = 255 iff active and flags[labels[i]] == 1
@@ -60,9 +61,7 @@ const STRONG: u32 = 4u;
 const EDGE: u32 = 255u;
 
 // A pixel the CPU flood can reach or start from: a seed (STRONG) or WEAK.
-// `ruled` is column-packed (common.wgsl pk_word): the class at (x, y) of level l.
-fn class_at(l: u32, x: u32, y: u32) -> u32 { return pk_byte(ruled[pk_word(l, x, y)], y); }
-
+// `ruled` is column-packed (common.wgsl pk_word).
 fn is_active(c: u32) -> bool {
     return c == WEAK || c == STRONG;
 }
@@ -105,31 +104,82 @@ fn unite(a0: u32, b0: u32) {
     }
 }
 
-// The atlas index of pixel id.
-
-// Union with the active ones of the left, up-left, up and up-right neighbours
-// (each 8-neighbour pair is visited once) of active pixel (x, y) of level l.
-fn merge_px(l: u32, x: u32, y: u32) {
-    let i = loff(l) + y * lw(l) + x;
-    let w = lw(l);
-    if (x > 0u && is_active(class_at(l, x - 1u, y))) { unite(i, i - 1u); }
-    if (y > 0u) {
-        let u = i - w;
-        if (x > 0u && is_active(class_at(l, x - 1u, y - 1u))) { unite(i, u - 1u); }
-        if (is_active(class_at(l, x, y - 1u))) { unite(i, u); }
-        if (x + 1u < w && is_active(class_at(l, x + 1u, y - 1u))) { unite(i, u + 1u); }
-    }
+// Joins the trees of i and t < i, i a pixel of the walk: i is most often
+// still a root (nobody linked it yet), so it is linked to t directly, with no
+// find. Otherwise i's parent old was replaced by min(old, t) and old is
+// joined to t as well: the first round of `unite` from the pair (i, t), whose
+// argument (above) holds for any hi > lo, root or not.
+fn link(i: u32, t: u32) {
+    let old = ~atomicMax(&labels[i], ~t);
+    if (old != NONE && old != t) { unite(old, t); }
 }
 
-// Column passes: each invocation reads its column's packed word once per four
-// rows (its 16 rows are 4 whole words) and works at the active pixels.
+// The packed words of columns x-1, x, x+1 holding row y of level l (the
+// column's own word in .y); a column outside the level reads as 0 (class
+// NONE in every row: never active).
+fn words3(l: u32, x: u32, y: u32) -> vec3<u32> {
+    let k = pk_word(l, x, y);
+    var r = vec3<u32>(0u, ruled[k], 0u);
+    if (x > 0u) { r.x = ruled[k - 1u]; }
+    if (x + 1u < lw(l)) { r.z = ruled[k + 1u]; }
+    return r;
+}
+
+// Row y's classes at columns x-1, x, x+1 from their words.
+fn row3(words: vec3<u32>, y: u32) -> vec3<u32> {
+    return (words >> vec3<u32>((y & 3u) * 8u)) & vec3<u32>(0xffu);
+}
+
+fn active3(c: vec3<u32>) -> vec3<bool> {
+    return (c == vec3<u32>(WEAK)) | (c == vec3<u32>(STRONG));
+}
+
+// merge: active pixel i at (x, y) is united with its active neighbours of
+// the row above (UL, U, UR) and the left (L), the only neighbours that come
+// before it in raster order, but only with as many as keep the components
+// exact (the scan-mask decision tree of Wu, Otoo & Suzuki, "Optimizing
+// two-pass connected-component labeling algorithms", 2009):
+// - U active: U alone. L, UL and UR come before i and are U's neighbours, so
+//   each is joined to U by the unions made at L, U and UR respectively (by
+//   induction in raster order: each pixel is joined to all its neighbours
+//   that come before it).
+// - otherwise L, else UL (L's up neighbour, so joined to L at L), and UR when
+//   active: UR is no neighbour of L or UL.
+// Every union made joins two 8-neighbours and every 8-neighbour pair ends up
+// joined, so the trees are the 8-connected components, as with all four unions.
+// Each invocation walks its column with the words of columns x-1, x, x+1 in
+// registers: three reads per four rows.
 @compute @workgroup_size(64, 1, 1)
 fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
-    var word = 0u;
+    if (c.y == c.z) { return; }
+    let l = c.w;
+    let w = lw(l);
+    // classes of the row above at x-1, x, x+1 (none above row 0)
+    var up = vec3<bool>(false);
+    if (c.y > 0u) { up = active3(row3(words3(l, c.x, c.y - 1u), c.y - 1u)); }
+    var words = vec3<u32>(0u);
     for (var y = c.y; y < c.z; y++) {
-        if ((y & 3u) == 0u) { word = ruled[pk_word(c.w, c.x, y)]; }
-        if (is_active(pk_byte(word, y))) { merge_px(c.w, c.x, y); }
+        if ((y & 3u) == 0u) { words = words3(l, c.x, y); }
+        let cur = active3(row3(words, y));
+        if (cur.y) {
+            let i = loff(l) + y * w + c.x;
+            // first and second neighbour to join (NONE: none)
+            var t = vec2<u32>(NONE);
+            if (up.y) {
+                t.x = i - w;
+            } else {
+                if (cur.x) {
+                    t.x = i - 1u;
+                } else if (up.x) {
+                    t.x = i - w - 1u;
+                }
+                if (up.z) { t.y = i - w + 1u; }
+            }
+            if (t.x != NONE) { link(i, t.x); }
+            if (t.y != NONE) { link(i, t.y); }
+        }
+        up = cur;
     }
 }
 
