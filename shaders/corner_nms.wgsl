@@ -1,5 +1,5 @@
 // SPEC 9: non-maximum suppression among corner candidates. Mirrors
-// src/cpu/corner_nms.rs. `cand` + `resp` -> survivors appended to `corners`
+// src/cpu/corner_nms.rs. `cand` (column-packed, common.wgsl pk_word) + `resp` -> survivors appended to `corners`
 // (GpuKeypoint, src/gpu/buffers.rs) with counters[CORNERS] as the cursor.
 // A column pass, all levels in one dispatch (over the tile list). The
 // append order is nondeterministic; select.wgsl puts the list in SPEC 9 order.
@@ -35,7 +35,7 @@ fn suppress(l: u32, p: vec2<u32>) {
     for (var y = y0; y <= y1; y++) {
         for (var x = x0; x <= x1; x++) {
             let j = loff(l) + y * w + x;
-            if (j != i && cand[j] != 0u && beats(bitcast<f32>(resp[j]), vec2(x, y), rp, p)) { return; }
+            if (j != i && pk_byte(cand[pk_word(l, x, y)], y) != 0u && beats(bitcast<f32>(resp[j]), vec2(x, y), rp, p)) { return; }
         }
     }
     // A survivor. P.capacity bounds the survivors (docs/algorithm.md), the
@@ -72,8 +72,11 @@ var<workgroup> todo_n: atomic<u32>;
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
     let l = span.w;
+    var word = 0u;
     for (var y = span.y; y < span.z; y++) {
-        if (cand[loff(l) + y * lw(l) + span.x] != 0u) {
+        // `cand` is column-packed: its word once per four rows
+        if ((y & 3u) == 0u) { word = cand[pk_word(l, span.x, y)]; }
+        if (pk_byte(word, y) != 0u) {
             todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
         }
     }

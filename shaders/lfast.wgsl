@@ -1,6 +1,7 @@
 // SPEC 8: the L-FAST corner test on the edge map (paper 3.2, Steps 1-5).
 // Mirrors src/cpu/lfast.rs. `edges` (+ `mask` when P.use_mask == 1) ->
-// `cand` (1 = candidate, 0 otherwise; every pixel of every level is written).
+// `cand` (1 = candidate, 0 otherwise; column-packed, common.wgsl pk_word;
+// every word of every level is written).
 // A column pass, all levels in one dispatch (over the tile list); the test
 // itself runs on the workgroup's compacted edge pixels (see main).
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/lfast.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -110,13 +111,16 @@ fn is_corner(l: u32, px: i32, py: i32) -> bool {
 }
 
 // Work-efficient: a column pass (tile_column) that lists its four tiles'
-// tested edge pixels in `todo` (workgroup memory) as it walks them, writing 0
-// at every other pixel; after one barrier the workgroup's invocations take the
-// list side by side and write the decisions, so the test runs in as few SIMD
-// lanes / warps as there are edge pixels. Entries: list_entry (common.wgsl).
+// tested edge pixels in `todo` (workgroup memory) as it walks them; after one
+// barrier the workgroup's invocations take the list side by side, so the test
+// runs in as few SIMD lanes / warps as there are edge pixels, and mark the
+// corners in `found`; after a second barrier each invocation writes its
+// column's packed words of `cand`. Entries: list_entry (common.wgsl).
 var<workgroup> todo: array<u32, 1024>;
 // zero at the start of the workgroup (WGSL zero-initialises workgroup memory)
 var<workgroup> todo_n: atomic<u32>;
+// bit r of found[lane]: row r of the lane's column is a candidate (zero at the start)
+var<workgroup> found: array<atomic<u32>, 64>;
 
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
@@ -133,18 +137,23 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     for (var y = span.y; y < span.z; y++) {
         // the column's packed word, once per four rows
         if ((y & 3u) == 0u) { word = edges[pk_word(l, span.x, y)]; }
-        let i = loff(l) + y * w + span.x;
         let tested = col && y >= b && y + b < h;
-        if (tested && pk_byte(word, y) == EDGE && (P.use_mask == 0u || mask[i] != 0u)) {
+        if (tested && pk_byte(word, y) == EDGE && (P.use_mask == 0u || mask[loff(l) + y * w + span.x] != 0u)) {
             todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
-        } else {
-            cand[i] = 0u;
         }
     }
     workgroupBarrier();
     let n = atomicLoad(&todo_n);
     for (var k = li.x; k < n; k += 64u) {
-        let p = list_pixel(wg, todo[k]);
-        cand[loff(p.z) + p.y * lw(p.z) + p.x] = u32(is_corner(p.z, i32(p.x), i32(p.y)));
+        let e = todo[k];
+        let p = list_pixel(wg, e);
+        if (is_corner(p.z, i32(p.x), i32(p.y))) { atomicOr(&found[e >> 4u], 1u << (e & 15u)); }
+    }
+    workgroupBarrier();
+    // Row r's bit becomes byte r % 4 of word r / 4 (a 0/1 byte).
+    let bits = atomicLoad(&found[li.x]);
+    for (var y = span.y; y < span.z; y += 4u) {
+        let q = bits >> (y - span.y);
+        cand[pk_word(l, span.x, y)] = (q & 1u) | ((q & 2u) << 7u) | ((q & 4u) << 14u) | ((q & 8u) << 21u);
     }
 }

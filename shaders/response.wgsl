@@ -1,6 +1,6 @@
 // SPEC 9: Harris corner response on D (7x7 block, 3x3 Sobel, k = 0.04), as
 // OpenCV ORB's HARRIS_SCORE. Mirrors src/cpu/response.rs.
-// `cand` (1 = candidate) + `denoised` -> `resp` (f32 bits) at candidates, 0
+// `cand` (1 = candidate; column-packed, common.wgsl pk_word) + `denoised` -> `resp` (f32 bits) at candidates, 0
 // elsewhere. A column pass, all levels in one dispatch (over the tile list); the
 // response itself runs on the workgroup's compacted candidates (see main).
 //
@@ -118,9 +118,12 @@ var<workgroup> todo_n: atomic<u32>;
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
     let l = span.w;
+    var word = 0u;
     for (var y = span.y; y < span.z; y++) {
+        // `cand` is column-packed: its word once per four rows
+        if ((y & 3u) == 0u) { word = cand[pk_word(l, span.x, y)]; }
         let i = loff(l) + y * lw(l) + span.x;
-        if (cand[i] != 0u) {
+        if (pk_byte(word, y) != 0u) {
             todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
         } else {
             resp[i] = 0u;

@@ -90,7 +90,7 @@ fn edge_maps_and_candidates_equal_the_cpu_on_every_level() {
                 "{name}: edges of level {l}"
             );
             let cands = lfast::cpu::lfast::lfast(&em.edges, None, &params);
-            let got = t::download_level(&ctx, &w.buffers, &w.buffers.cand, l).unwrap();
+            let got = t::download_packed(&ctx, &w.buffers, &w.buffers.cand, l).unwrap();
             let (lw, _) = cfg.level_sizes(img.width, img.height)[l];
             let gpu_cands: Vec<[u32; 2]> =
                 got.iter().enumerate().filter(|(_, v)| **v != 0).map(|(i, _)| [i as u32 % lw, i as u32 / lw]).collect();

@@ -25,12 +25,12 @@ fn data(name: &str) -> Plane<u8> {
 }
 
 /// A candidate map (1 = candidate) of a level from a list of positions.
-fn cand_map(w: u32, h: u32, cands: &[[u32; 2]]) -> Vec<u32> {
-    let mut v = vec![0u32; (w * h) as usize];
+fn cand_map(w: u32, h: u32, cands: &[[u32; 2]]) -> Plane<u8> {
+    let mut v = vec![0u8; (w * h) as usize];
     for &[x, y] in cands {
         v[(y * w + x) as usize] = 1;
     }
-    v
+    Plane::from_vec(w, h, v).unwrap()
 }
 
 /// What the CPU gives per level: D, the L-FAST candidates and their responses.
@@ -120,7 +120,7 @@ fn response_matches_cpu_on_real_candidates() {
         let levels = cpu_levels(&cfg, &img);
         for (l, lv) in levels.iter().enumerate() {
             t::upload_packed(&ctx, &b, &b.denoised, l, &lv.denoised);
-            t::upload_level(&ctx, &b, &b.cand, l, &cand_map(lv.denoised.width, lv.denoised.height, &lv.cands));
+            t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(lv.denoised.width, lv.denoised.height, &lv.cands));
         }
         t::run(&ctx, &pass, &b).unwrap();
         for (l, lv) in levels.iter().enumerate() {
@@ -166,7 +166,7 @@ fn response_matches_cpu_at_every_pixel() {
         let lv = t::cpu_levels(&cfg, img);
         for (l, p) in lv.iter().enumerate() {
             t::upload_packed(&ctx, &b, &b.denoised, l, p);
-            t::upload_level(&ctx, &b, &b.cand, l, &vec![1; p.len()]);
+            t::upload_packed(&ctx, &b, &b.cand, l, &Plane::from_vec(p.width, p.height, vec![1; p.len()]).unwrap());
         }
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in lv.iter().enumerate() {
@@ -204,7 +204,7 @@ fn corner_nms_matches_cpu_on_real_images() {
             let mut want = Vec::new();
             for (l, lv) in levels.iter().enumerate() {
                 let (w, h) = (lv.denoised.width, lv.denoised.height);
-                t::upload_level(&ctx, &b, &b.cand, l, &cand_map(w, h, &lv.cands));
+                t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(w, h, &lv.cands));
                 let mut resp = vec![0u32; (w * h) as usize];
                 for (&[x, y], v) in lv.cands.iter().zip(&lv.resp) {
                     resp[(y * w + x) as usize] = v.to_bits();
@@ -256,7 +256,7 @@ fn corner_nms_breaks_ties_by_position() {
                         }
                     }
                 }
-                t::upload_level(&ctx, &b, &b.cand, l, &cand_map(lw, lh, &cands));
+                t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(lw, lh, &cands));
                 t::upload_level(&ctx, &b, &b.resp, l, &rmap);
                 for i in corner_nms::corner_nms(lw, lh, &cands, &resp, r) {
                     let c = Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] };
@@ -289,13 +289,13 @@ fn corner_nms_literal() {
         ([12, 12], 3.0),
         ([13, 13], 4.0),
     ];
-    let mut cand = vec![0u32; 400];
+    let mut cand = vec![0u8; 400];
     let mut resp = vec![0u32; 400];
     for ([x, y], r) in pts {
         cand[y * 20 + x] = 1;
         resp[y * 20 + x] = r.to_bits();
     }
-    t::upload_level(&ctx, &b, &b.cand, 0, &cand);
+    t::upload_packed(&ctx, &b, &b.cand, 0, &Plane::from_vec(20, 20, cand).unwrap());
     t::upload_level(&ctx, &b, &b.resp, 0, &resp);
     t::run(&ctx, &pass, &b).unwrap();
     let mut got: Vec<(u32, u32)> = download_corners(&ctx, &b).iter().map(|k| (k.px, k.py)).collect();
@@ -467,7 +467,7 @@ fn response_nms_select_chain_matches_cpu() {
             for (l, lv) in levels.iter().enumerate() {
                 let (w, h) = (lv.denoised.width, lv.denoised.height);
                 t::upload_packed(&ctx, &b, &b.denoised, l, &lv.denoised);
-                t::upload_level(&ctx, &b, &b.cand, l, &cand_map(w, h, &lv.cands));
+                t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(w, h, &lv.cands));
                 let keep = corner_nms::corner_nms(w, h, &lv.cands, &lv.resp, cfg.nms_radius);
                 per_level.push(
                     keep.iter()

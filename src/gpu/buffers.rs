@@ -189,7 +189,7 @@ pub struct Buffers {
     pub flags: wgpu::Buffer,
     /// E: 255 = edge, column-packed as `classes`.
     pub edges: wgpu::Buffer,
-    /// L-FAST candidates (0/1).
+    /// L-FAST candidates (0/1), column-packed as `classes`.
     pub cand: wgpu::Buffer,
     /// Harris response of candidates (f32 bits).
     pub resp: wgpu::Buffer,
@@ -339,7 +339,7 @@ impl Buffers {
             labels: px("labels"),
             flags: px("flags"),
             edges: buf("edges", allocated.packed * 4),
-            cand: px("cand"),
+            cand: buf("cand", allocated.packed * 4),
             resp: px("resp"),
             corners: buf("corners", cap * KP_WORDS * 4),
             ranks: buf("ranks", cap * 16),
