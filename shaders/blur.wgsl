@@ -6,6 +6,7 @@
 // rows of tiles, the vertical one columns (shaders/common.wgsl).
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/blur.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
+// `gray` is column-packed (common.wgsl pk_word).
 @group(0) @binding(1) var<storage, read> gray: array<u32>;
 @group(0) @binding(2) var<storage, read_write> blur_tmp: array<u32>;
 // `smoothed` is Buffers::smooth (`smooth` is a WGSL reserved word).
@@ -36,6 +37,9 @@ fn taps(v0: u32, v1: u32, v2: u32, v3: u32, v4: u32, v5: u32, v6: u32) -> u32 {
         + ORB_KERNEL[4] * v4 + ORB_KERNEL[5] * v5 + ORB_KERNEL[6] * v6;
 }
 
+// Pixel (x, y) of level l of `gray`.
+fn gray_at(l: u32, x: u32, y: u32) -> u32 { return pk_byte(gray[pk_word(l, x, y)], y); }
+
 // A row pass (tile_row_segment): each invocation walks one row of a tile,
 // the seven taps in registers (one read per pixel instead of seven).
 @compute @workgroup_size(64, 1, 1)
@@ -44,17 +48,18 @@ fn horizontal(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id
     let l = id.z;
     if (id.x >= lw(l) || id.y >= lh(l)) { return; }
     let w = i32(lw(l));
-    let row = loff(l) + id.y * lw(l);
+    let y = id.y;
+    let row = loff(l) + y * lw(l);
     let x0 = i32(id.x);
-    var v0 = gray[row + reflected(x0 - 3, w)];
-    var v1 = gray[row + reflected(x0 - 2, w)];
-    var v2 = gray[row + reflected(x0 - 1, w)];
-    var v3 = gray[row + u32(x0)];
-    var v4 = gray[row + reflected(x0 + 1, w)];
-    var v5 = gray[row + reflected(x0 + 2, w)];
+    var v0 = gray_at(l, reflected(x0 - 3, w), y);
+    var v1 = gray_at(l, reflected(x0 - 2, w), y);
+    var v2 = gray_at(l, reflected(x0 - 1, w), y);
+    var v3 = gray_at(l, u32(x0), y);
+    var v4 = gray_at(l, reflected(x0 + 1, w), y);
+    var v5 = gray_at(l, reflected(x0 + 2, w), y);
     let end = min(x0 + i32(TILE), w);
     for (var x = x0; x < end; x++) {
-        let v6 = gray[row + reflected(x + 3, w)];
+        let v6 = gray_at(l, reflected(x + 3, w), y);
         blur_tmp[row + u32(x)] = taps(v0, v1, v2, v3, v4, v5, v6);
         v0 = v1; v1 = v2; v2 = v3; v3 = v4; v4 = v5; v5 = v6;
     }

@@ -51,9 +51,13 @@ fn loff(l: u32) -> u32 { return P.levels[l].z; }
 // Atlas index of (x, y) at level l, coordinates clamped into the level
 // (SPEC's replicate border).
 fn clamped(l: u32, x: i32, y: i32) -> u32 {
-    let cx = u32(clamp(x, 0, i32(lw(l)) - 1));
-    let cy = u32(clamp(y, 0, i32(lh(l)) - 1));
-    return loff(l) + cy * lw(l) + cx;
+    let c = clamped_xy(l, x, y);
+    return loff(l) + c.y * lw(l) + c.x;
+}
+
+// (x, y) clamped into level l.
+fn clamped_xy(l: u32, x: i32, y: i32) -> vec2<u32> {
+    return vec2<u32>(u32(clamp(x, 0, i32(lw(l)) - 1)), u32(clamp(y, 0, i32(lh(l)) - 1)));
 }
 
 fn quota(l: u32) -> u32 { return P.quotas[l / 4u][l % 4u]; }

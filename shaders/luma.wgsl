@@ -1,6 +1,8 @@
 // SPEC 0: the input as 8-bit gray into level 0 of `gray`. Mirrors
 // src/image.rs (`luma_bt601`, `to_gray`).
-// Two entry points over level 0, one invocation per pixel:
+// `gray` is column-packed (common.wgsl pk_word). Two entry points over level
+// 0, one invocation per packed word (four rows of one column; dispatch
+// FrameLayout::packed_level_groups):
 // - from_bytes: `input` holds the gray bytes, four pixels per word,
 //   little-endian, row-major, no row padding (the host's queue.write_buffer).
 // - from_texture: an Rgba8Unorm / Bgra8Unorm / R8Unorm texture. Each unorm
@@ -23,20 +25,30 @@ fn unorm_byte(v: f32) -> u32 { return u32(round(clamp(v, 0.0, 1.0) * 255.0)); }
 
 @compute @workgroup_size(16, 16, 1)
 fn from_bytes(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= lw(0u) || id.y >= lh(0u)) { return; }
-    let i = id.y * lw(0u) + id.x;
-    gray[loff(0u) + i] = (input[i / 4u] >> (8u * (i % 4u))) & 255u;
+    let y0 = id.y * 4u;
+    if (id.x >= lw(0u) || y0 >= lh(0u)) { return; }
+    var word = 0u;
+    for (var y = y0; y < min(y0 + 4u, lh(0u)); y++) {
+        let i = y * lw(0u) + id.x;
+        word |= pk_place((input[i / 4u] >> (8u * (i % 4u))) & 255u, y);
+    }
+    gray[pk_word(0u, id.x, y0)] = word;
 }
 
 @compute @workgroup_size(16, 16, 1)
 fn from_texture(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= lw(0u) || id.y >= lh(0u)) { return; }
-    // textureLoad returns the channels in logical order, so Bgra8Unorm reads
-    // as RGBA too.
-    let v = textureLoad(tex, vec2<u32>(id.x, id.y), 0);
-    var y = unorm_byte(v.r);
-    if (tex_kind.x == 0u) {
-        y = luma_bt601(unorm_byte(v.r), unorm_byte(v.g), unorm_byte(v.b));
+    let y0 = id.y * 4u;
+    if (id.x >= lw(0u) || y0 >= lh(0u)) { return; }
+    var word = 0u;
+    for (var y = y0; y < min(y0 + 4u, lh(0u)); y++) {
+        // textureLoad returns the channels in logical order, so Bgra8Unorm
+        // reads as RGBA too.
+        let v = textureLoad(tex, vec2<u32>(id.x, y), 0);
+        var g = unorm_byte(v.r);
+        if (tex_kind.x == 0u) {
+            g = luma_bt601(unorm_byte(v.r), unorm_byte(v.g), unorm_byte(v.b));
+        }
+        word |= pk_place(g, y);
     }
-    gray[loff(0u) + id.y * lw(0u) + id.x] = y;
+    gray[pk_word(0u, id.x, y0)] = word;
 }

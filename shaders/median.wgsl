@@ -1,5 +1,6 @@
 // SPEC 1: noise-flagged 3x3 median. Mirrors src/cpu/median.rs.
 // One invocation per column of a tile, all levels in one dispatch (over the tile list).
+// `src` (the gray levels) and `dst` (D) are column-packed (common.wgsl pk_word).
 // Tests: tests/gpu_median.rs (this pass alone == src/cpu/median.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> src: array<u32>;
@@ -53,30 +54,36 @@ fn median9(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>) -> u32 {
     return p4;
 }
 
-// The pixels (x-1, x, x+1) of row `row` (an atlas index), x clamped into the level.
-fn row3(row: u32, xl: u32, x: u32, xr: u32) -> vec3<u32> {
-    return vec3<u32>(src[row + xl], src[row + x], src[row + xr]);
+// The pixels (x-1, x, x+1) of row y of level l, y clamped into the level and
+// x-1, x+1 given clamped (xl, xr). `cw` caches the three columns' words of
+// group `cg`: the walk asks for rows in order, so each word is read once.
+fn row3(l: u32, xl: u32, x: u32, xr: u32, y: u32, cg: ptr<function, u32>, cw: ptr<function, vec3<u32>>) -> vec3<u32> {
+    let yc = min(y, lh(l) - 1u);
+    if ((yc >> 2u) != *cg) {
+        *cw = vec3<u32>(src[pk_word(l, xl, yc)], src[pk_word(l, x, yc)], src[pk_word(l, xr, yc)]);
+        *cg = yc >> 2u;
+    }
+    return (*cw >> vec3<u32>((yc & 3u) * 8u)) & vec3<u32>(0xffu);
 }
 
 // A column pass (tile_column): each invocation walks one column of a tile
-// with the 3x3 window in registers (3 reads per pixel instead of 13).
+// with the 3x3 window in registers (three words per four rows).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
     if (span.y == span.z) { return; }
     let l = span.w;
     let w = lw(l);
-    let h = lh(l);
-    let base = loff(l);
     let x = span.x;
     let xl = select(x - 1u, 0u, x == 0u);
     let xr = min(x + 1u, w - 1u);
-    var a = row3(base + select(span.y - 1u, 0u, span.y == 0u) * w, xl, x, xr);
-    var b = row3(base + span.y * w, xl, x, xr);
-    // `dst` (D) is column-packed (common.wgsl pk_word): a word per four rows
+    var cg = 0xffffffffu;
+    var cw = vec3<u32>(0u);
+    var a = row3(l, xl, x, xr, select(span.y - 1u, 0u, span.y == 0u), &cg, &cw);
+    var b = row3(l, xl, x, xr, span.y, &cg, &cw);
     var word = 0u;
     for (var y = span.y; y < span.z; y++) {
-        let c = row3(base + min(y + 1u, h - 1u) * w, xl, x, xr);
+        let c = row3(l, xl, x, xr, y + 1u, &cg, &cw);
         var v = b.y;
         if (is_noise(v, vec4<u32>(a.y, c.y, b.x, b.z))) { v = median9(a, b, c); }
         word |= pk_place(v, y);

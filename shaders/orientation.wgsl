@@ -19,7 +19,12 @@ const UMAX: array<i32, 16> = array<i32, 16>(15, 15, 15, 15, 14, 14, 14, 13, 13, 
 // Per bin the Q8 direction (cos, sin) of its upper boundary (AngleBins::bounds).
 @group(0) @binding(4) var<storage, read> angle_bounds: array<vec2<i32>>;
 
-fn px(l: u32, x: i32, y: i32) -> i32 { return i32(gray[clamped(l, x, y)]); }
+// Pixel (x, y) of level l, clamped into the level; `gray` is column-packed
+// (common.wgsl pk_word).
+fn px(l: u32, x: i32, y: i32) -> i32 {
+    let c = clamped_xy(l, x, y);
+    return i32(pk_byte(gray[pk_word(l, c.x, c.y)], c.y));
+}
 
 // This invocation's share of (m10, m01) over the disc around (x, y): every
 // 64th pixel of the 31x31 square, those outside the disc (|u| > UMAX[|v|])

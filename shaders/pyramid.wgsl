@@ -2,6 +2,7 @@
 // bilinear weights in Q11 (OpenCV INTER_LINEAR). Mirrors src/cpu/pyramid.rs
 // (`tap`, `resize_naive`). One dispatch per level: `level_index.x` = l,
 // given by the dynamic offset of `level_index` (record l at l * 256 bytes).
+// `gray` is column-packed (common.wgsl pk_word).
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/pyramid.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 const COEF_BITS: u32 = 11u;
@@ -27,15 +28,21 @@ fn tap(d: u32, src_len: u32, dst_len: u32) -> vec2<u32> {
     return vec2(s, w);
 }
 
-// The horizontal blend of source row `row` (an atlas index) at taps sx0, sx1
-// with weight wx (< 2^19).
-fn hblend(row: u32, sx0: u32, sx1: u32, wx: u32) -> u32 {
-    return (ONE - wx) * gray[row + sx0] + wx * gray[row + sx1];
+// The horizontal blend of source row sy of level p at taps sx0, sx1 with
+// weight wx (< 2^19). `cw` caches the two columns' words of group `cg` (rows
+// only move down, so each word is read once).
+fn hblend(p: u32, sy: u32, sx0: u32, sx1: u32, wx: u32, cg: ptr<function, u32>, cw: ptr<function, vec2<u32>>) -> u32 {
+    if ((sy >> 2u) != *cg) {
+        *cw = vec2<u32>(gray[pk_word(p, sx0, sy)], gray[pk_word(p, sx1, sy)]);
+        *cg = sy >> 2u;
+    }
+    return (ONE - wx) * pk_byte((*cw).x, sy) + wx * pk_byte((*cw).y, sy);
 }
 
 // Dispatched as FrameLayout::level_column_groups: each invocation walks 16
-// rows of one destination column. Its horizontal taps are computed once, and
-// a source row's blend is reused by the next destination row that reads it.
+// rows of one destination column (four packed words). Its horizontal taps are
+// computed once, and a source row's blend is reused by the next destination
+// row that reads it.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
     let l = level_index.x;
@@ -57,6 +64,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg:
     var r1 = 0xffffffffu;
     var h0 = 0u;
     var h1 = 0u;
+    var cg = 0xffffffffu;
+    var cw = vec2<u32>(0u);
+    var word = 0u;
     let end = min(y0 + TILE, dh);
     for (var y = y0; y < end; y++) {
         let ty = tap(y, sh, dh);
@@ -66,18 +76,22 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg:
         if (sy0 == r1) {
             h0 = h1;
         } else if (sy0 != r0) {
-            h0 = hblend(loff(p) + sy0 * sw, sx0, sx1, wx);
+            h0 = hblend(p, sy0, sx0, sx1, wx, &cg, &cw);
         }
         if (sy1 == sy0) {
             h1 = h0;
         } else if (sy1 != r1) {
-            h1 = hblend(loff(p) + sy1 * sw, sx0, sx1, wx);
+            h1 = hblend(p, sy1, sx0, sx1, wx, &cg, &cw);
         }
         r0 = sy0;
         r1 = sy1;
         let wy = ty.y;
         // the vertical blend (< 2^30): no overflow
         let v = (ONE - wy) * h0 + wy * h1;
-        gray[loff(l) + y * dw + x] = (v + (1u << (2u * COEF_BITS - 1u))) >> (2u * COEF_BITS);
+        word |= pk_place((v + (1u << (2u * COEF_BITS - 1u))) >> (2u * COEF_BITS), y);
+        if (pk_complete(y, end)) {
+            gray[pk_word(l, x, y)] = word;
+            word = 0u;
+        }
     }
 }

@@ -118,7 +118,7 @@ pub fn cpu_levels(cfg: &crate::Config, img: &Plane<u8>) -> Vec<Plane<u8>> {
 pub fn upload_pyramid(ctx: &GpuContext, cfg: &crate::Config, b: &Buffers, img: &Plane<u8>) -> Vec<Plane<u8>> {
     let levels = cpu_levels(cfg, img);
     for (l, p) in levels.iter().enumerate() {
-        upload_plane(ctx, b, &b.gray, l, p);
+        upload_packed(ctx, b, &b.gray, l, p);
     }
     levels
 }

@@ -23,7 +23,7 @@ fn random_bytes(n: usize, seed: u32) -> Vec<u8> {
 }
 
 fn level0(ctx: &GpuContext, b: &Buffers) -> Vec<u8> {
-    t::download_level(ctx, b, &b.gray, 0).unwrap().iter().map(|&v| u8::try_from(v).unwrap()).collect()
+    t::download_packed(ctx, b, &b.gray, 0).unwrap().iter().map(|&v| u8::try_from(v).unwrap()).collect()
 }
 
 #[test]
@@ -174,15 +174,15 @@ fn pyramid_matches_cpu() {
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         // stale data in the upper levels must not matter
         for l in 1..levels as usize {
-            let n = b.layout.level_range(l).len();
-            t::upload_level(&ctx, &b, &b.gray, l, &vec![77; n]);
+            let (lw, lh) = b.layout.sizes[l];
+            t::upload_packed(&ctx, &b, &b.gray, l, &Plane::from_vec(lw, lh, vec![77; (lw * lh) as usize]).unwrap());
         }
-        t::upload_plane(&ctx, &b, &b.gray, 0, &img);
+        t::upload_packed(&ctx, &b, &b.gray, 0, &img);
         t::run(&ctx, &pass, &b).unwrap();
         let want = pyramid::pyramid(&img, &cfg.level_sizes(w, h));
         assert_eq!(want.len(), levels as usize);
         for (l, p) in want.iter().enumerate() {
-            let got = t::download_level(&ctx, &b, &b.gray, l).unwrap();
+            let got = t::download_packed(&ctx, &b, &b.gray, l).unwrap();
             let want: Vec<u32> = p.data.iter().map(|&v| v as u32).collect();
             assert_eq!(got, want, "{w}x{h} level {l} ({}x{})", p.width, p.height);
         }
@@ -197,11 +197,11 @@ fn pyramid_with_other_scale_factors() {
         let cfg = Config { n_levels: levels, scale_factor: scale, ..Config::default() };
         let img = t::test_image(w, h, levels);
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
-        t::upload_plane(&ctx, &b, &b.gray, 0, &img);
+        t::upload_packed(&ctx, &b, &b.gray, 0, &img);
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in t::cpu_levels(&cfg, &img).iter().enumerate() {
             let want: Vec<u32> = p.data.iter().map(|&v| v as u32).collect();
-            assert_eq!(t::download_level(&ctx, &b, &b.gray, l).unwrap(), want, "{w}x{h} scale {scale} level {l}");
+            assert_eq!(t::download_packed(&ctx, &b, &b.gray, l).unwrap(), want, "{w}x{h} scale {scale} level {l}");
         }
     }
 }
@@ -226,9 +226,9 @@ fn blur_matches_cpu_on_every_level() {
     // a hand-checked case: an impulse spreads as the outer product of the kernel
     let cfg = Config { n_levels: 1, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 9, 9).unwrap();
-    let mut img = vec![0u32; 81];
+    let mut img = vec![0u8; 81];
     img[4 * 9 + 4] = 255;
-    t::upload_level(&ctx, &b, &b.gray, 0, &img);
+    t::upload_packed(&ctx, &b, &b.gray, 0, &Plane::from_vec(9, 9, img).unwrap());
     t::run(&ctx, &pass, &b).unwrap();
     let got = t::download_level(&ctx, &b, &b.smooth, 0).unwrap();
     let k = blur::ORB_KERNEL;
@@ -380,7 +380,7 @@ fn orientation_of_literal_directions() {
     ];
     for (f, bin, angle) in cases {
         let img = Plane::from_vec(64, 64, (0..64 * 64).map(|i| f(i % 64, i / 64)).collect()).unwrap();
-        t::upload_plane(&ctx, &b, &b.gray, 0, &img);
+        t::upload_packed(&ctx, &b, &b.gray, 0, &img);
         let kp = GpuKeypoint { px: 32, py: 32, ..Default::default() };
         upload_keypoints(&ctx, &b, &[kp]);
         t::run(&ctx, &pass, &b).unwrap();

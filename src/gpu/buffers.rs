@@ -156,7 +156,7 @@ pub struct Buffers {
     pub level_index: wgpu::Buffer,
     /// 8-bit gray input of level 0, four pixels per word (see shaders/luma.wgsl).
     pub input: wgpu::Buffer,
-    /// The pyramid (level 0 = the input's luma).
+    /// The pyramid (level 0 = the input's luma), column-packed as `classes`.
     pub gray: wgpu::Buffer,
     /// Level masks (nonzero = on), read when `Params::use_mask` is 1.
     pub mask: wgpu::Buffer,
@@ -275,8 +275,11 @@ impl Buffers {
         let lim = limits.max_compute_workgroups_per_dimension;
         // keypoint passes are dispatched indirectly with ceil(count / 64) groups
         let gk = layout.capacity.div_ceil(64);
-        // luma and the pyramid dispatch one level's tile grid
-        let [lx, ly, _] = layout.level_groups(0);
+        // luma (a word per invocation) and the pyramid (a column of a tile
+        // per invocation) dispatch over one level; level 0 is the largest
+        let [px_, py_, _] = layout.packed_level_groups(0);
+        let [cx, cy, _] = layout.level_column_groups(0);
+        let (lx, ly) = (px_.max(cx), py_.max(cy));
         if gx > lim || gy > lim || gz > lim || gk > lim || lx > lim || ly > lim {
             return Err(Error::GpuLimits {
                 reason: format!(
@@ -323,7 +326,7 @@ impl Buffers {
             ),
             level_index: init("level_index", &level_index, wgpu::BufferUsages::UNIFORM),
             input: buf("input", (width as u64 * height as u64).next_multiple_of(4)),
-            gray: px("gray"),
+            gray: buf("gray", allocated.packed * 4),
             mask: px("mask"),
             denoised: buf("denoised", allocated.packed * 4),
             stage: stage_planes.then(|| StagePlanes { gx: px("gx"), gy: px("gy"), s: px("s") }),

@@ -237,10 +237,11 @@ impl FrameLayout {
         if n <= row { [n, 1, 1] } else { [row, n.div_ceil(row), 1] }
     }
 
-    /// Workgroups of a per-pixel pass over level `l` alone.
-    pub fn level_groups(&self, l: usize) -> [u32; 3] {
+    /// Workgroups of a 16x16 pass over the packed words of level `l` alone: one
+    /// invocation per word, four rows of a column (shaders/luma.wgsl).
+    pub fn packed_level_groups(&self, l: usize) -> [u32; 3] {
         let (w, h) = self.sizes[l];
-        [w.div_ceil(TILE), h.div_ceil(TILE), 1]
+        [w.div_ceil(TILE), h.div_ceil(4).div_ceil(TILE), 1]
     }
 
     /// Workgroups of a column pass over level `l` alone: one column per

@@ -73,7 +73,7 @@ impl LumaPass {
 
     /// Records the texture path with a bind group from [`bind_texture`](Self::bind_texture).
     pub fn record_texture(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.texture.dispatch(pass, bound, b.layout.level_groups(0));
+        self.texture.dispatch(pass, bound, b.layout.packed_level_groups(0));
     }
 }
 
@@ -104,6 +104,6 @@ impl Pass for LumaPass {
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.bytes.dispatch(pass, bound, b.layout.level_groups(0));
+        self.bytes.dispatch(pass, bound, b.layout.packed_level_groups(0));
     }
 }
