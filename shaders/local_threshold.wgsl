@@ -100,7 +100,9 @@ var<workgroup> lo_inv: atomic<u32>;
 var<workgroup> hi_1: atomic<u32>;
 var<workgroup> part: array<u32, 16>;
 
-@compute @workgroup_size(256, 1, 1)
+// 32 invocations, as cells: with one per bin the workgroups' own cost
+// dominated on lavapipe.
+@compute @workgroup_size(32, 1, 1)
 fn stats(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let l = wg.z;
     let g = P.grids[l];
@@ -110,11 +112,22 @@ fn stats(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: ve
     let j = wg.y;
     // Workgroup-uniform: the barriers below are reached by all or none.
     if (l >= P.n_levels || i >= nx || j >= ny) { return; }
-    let c = atomicLoad(&window_hist[(P.levels[l].w + j * nx + i) * 256u + li]);
-    atomicStore(&bins[li], c);
-    if (c != 0u) {
-        atomicMax(&lo_inv, 256u - li);
-        atomicMax(&hi_1, li + 1u);
+    let base = (P.levels[l].w + j * nx + i) * 256u;
+    // bins li, li + 32, ... into workgroup memory; this invocation's lowest
+    // non-empty bin and 1 + its highest (0: none)
+    var lo = 256u;
+    var hi = 0u;
+    for (var k = li; k < 256u; k += 32u) {
+        let c = atomicLoad(&window_hist[base + k]);
+        atomicStore(&bins[k], c);
+        if (c != 0u) {
+            lo = min(lo, k);
+            hi = k + 1u;
+        }
+    }
+    if (hi != 0u) {
+        atomicMax(&lo_inv, 256u - lo);
+        atomicMax(&hi_1, hi);
     }
     workgroupBarrier();
     if (li < 16u) {
