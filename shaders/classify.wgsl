@@ -1,6 +1,6 @@
 // SPEC 6: the double adaptive dual threshold (paper Algorithm 2), as exact
 // rational comparisons. Mirrors src/cpu/classify.rs.
-// m, nms, otsu, windows, grid -> classes (NONE 0, WEAK_WEAK 1, WEAK 2,
+// m (M8 = min(M, 255)), nms, otsu, windows, grid -> classes (NONE 0, WEAK_WEAK 1, WEAK 2,
 // WEAK_STRONG 3, STRONG 4; column-packed, common.wgsl pk_word). A column pass, all levels in one dispatch (over
 // the tile list).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/classify.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -20,7 +20,10 @@ const STRONG: u32 = 4u;
 
 // `class_of` in src/cpu/classify.rs: t1 = T1 = k + 1, v3 the window's V3,
 // alpha_pct alpha in hundredths (< 100). M <= 360 and V3 <= 765 keep every
-// product far below 2^32.
+// product far below 2^32. Given M8 = min(M, 255) for M, it answers as for M
+// (docs/algorithm.md, stage 6): Otsu's k <= 254 makes t1 <= 255, so M >= t1
+// and 2M >= t1 do not change; M >= 255 already makes M above TL1; and
+// 300 * 255 >= 100 * 765 makes it above TL2.
 fn class_of(mv: u32, t1: u32, v3: u32, alpha_pct: u32) -> u32 {
     let above_t1 = mv >= t1;
     let above_t2 = 2u * mv >= t1;
@@ -51,16 +54,20 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let i = grid[g.z + g.x + g.y + span.x];
     // `classes` is column-packed: four rows to a word, written when complete
     // `nms` is column-packed too: its word is read once per four rows
+    // `m` is column-packed like `nms`
     var word = 0u;
     var flags = 0u;
+    var mags = 0u;
     for (var y = span.y; y < span.z; y++) {
-        if ((y & 3u) == 0u) { flags = nms[pk_word(l, span.x, y)]; }
-        let p = loff(l) + y * lw(l) + span.x;
+        if ((y & 3u) == 0u) {
+            flags = nms[pk_word(l, span.x, y)];
+            mags = m[pk_word(l, span.x, y)];
+        }
         var c = NONE;
         if (t1 != 0u && pk_byte(flags, y) != 0u) {
             let j = grid[g.z + g.x + g.y + lw(l) + y];
             let v3 = windows[(P.levels[l].w + j * g.x + i) * 4u + 3u];
-            c = class_of(m[p], t1, v3, P.alpha_pct);
+            c = class_of(pk_byte(mags, y), t1, v3, P.alpha_pct);
         }
         word |= pk_place(c, y);
         if (pk_complete(y, span.z)) {

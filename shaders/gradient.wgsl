@@ -1,5 +1,6 @@
 // SPEC 2: LSD 2x2 gradient (paper Eq. 2) in integers. Mirrors src/cpu/gradient.rs.
-// denoised -> gx (gx2 as i32), gy (gy2 as i32), s (S = gx2^2 + gy2^2), m (M = isqrt(S) >> 1).
+// denoised -> gx (gx2 as i32), gy (gy2 as i32), s (S = gx2^2 + gy2^2), m (M8 =
+// min(M, 255), M = isqrt(S) >> 1; column-packed, common.wgsl pk_word).
 // A column pass, all levels in one dispatch (over the tile list).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/gradient.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
@@ -27,6 +28,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     var row = loff(l) + span.y * w;
     var a = dval(l, x, span.y);   // (x, y)
     var b = dval(l, xr, span.y);  // (x+1, y)
+    var word = 0u;
     for (var y = span.y; y < span.z; y++) {
         let yb = min(y + 1u, h - 1u);
         let c = dval(l, x, yb);   // (x, y+1)
@@ -38,7 +40,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         gx[i] = dx;
         gy[i] = dy;
         s[i] = sq;
-        m[i] = magnitude(sq);
+        word |= pk_place(min(magnitude(sq), 255u), y);
+        if (pk_complete(y, span.z)) {
+            m[pk_word(l, x, y)] = word;
+            word = 0u;
+        }
         a = c;
         b = e;
         row += w;

@@ -3,7 +3,8 @@
 // histogram.wgsl (which mirror src/cpu/gradient.rs, nms.rs, histogram.rs), and
 // to the CPU's fused rows (src/cpu/fused.rs, `gradient_row` and the NMS inside
 // `classify_row`), without the gx, gy and S planes: those live only in registers.
-// denoised -> m (M), nms (1 = survivor; column-packed), hist[l * 256 + M8]; all levels in one
+// denoised -> m (M8 = min(M, 255)), nms (1 = survivor), both column-packed,
+// hist[l * 256 + M8]; all levels in one
 // dispatch (over the tile list). `hist` is cleared by the pass before this runs.
 // Tests: tests/gpu_edges_front.rs (this pass == the three staged passes and the
 // CPU) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -54,7 +55,7 @@ fn s3(g: array<vec2<i32>, 3>, valid: vec3<bool>) -> vec3<u32> {
 
 // A column pass (tile_column): the invocation of column x walks its rows with
 // D of columns x-1..x+2 and S of columns x-1..x+1 in registers (rows y-1, y,
-// y+1): four packed words per four rows (d4) and two writes per pixel; runs
+// y+1): four packed words per four rows (d4) and two per four rows written; runs
 // of equal M8 are counted locally (histogram_bins.wgsl, appended to this shader).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
@@ -81,6 +82,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         var g = grad3(dcur, dnext);
         var mid = s3(g, cols);
         var flags = 0u;
+        var mags = 0u;
         for (var y = span.y; y < span.z; y++) {
             // row y + 1: its S (0 below the last row) and, next time, its gradients
             let dnn = d4(l, x, y + 2u, &cg, &cw);
@@ -95,16 +97,17 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
                 let b = rows[o.w + 1][o.z + 1];
                 keep = select(0u, 1u, v > a && v >= b);
             }
-            let i = loff(l) + y * lw(l) + x;
-            let mv = magnitude(v);
-            m[i] = mv;
-            // `nms` is column-packed: a word per four rows
+            let m8 = min(magnitude(v), 255u);
+            // `m` and `nms` are column-packed: a word each per four rows
+            mags |= pk_place(m8, y);
             flags |= pk_place(keep, y);
             if (pk_complete(y, span.z)) {
+                m[pk_word(l, x, y)] = mags;
                 nms[pk_word(l, x, y)] = flags;
+                mags = 0u;
                 flags = 0u;
             }
-            count_m8(&run, sub, min(mv, 255u));
+            count_m8(&run, sub, m8);
             up = mid;
             mid = down;
             g = gn;

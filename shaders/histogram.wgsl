@@ -1,5 +1,6 @@
 // SPEC 4, first half: the 256-bin histogram of M8 = min(M, 255), per level.
-// Mirrors src/cpu/histogram.rs. m -> hist[l * 256 + M8], all levels in one
+// Mirrors src/cpu/histogram.rs. m (M8, column-packed, common.wgsl pk_word) ->
+// hist[l * 256 + M8], all levels in one
 // dispatch (over the tile list). `hist` is cleared by the pass before this runs.
 // The counting itself is shaders/histogram_bins.wgsl, shared with gradient_nms.wgsl.
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/histogram.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -15,8 +16,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let l = span.w;
     let sub = (li.x / TILE) * 256u;
     var run = vec2<u32>(0u);
+    var word = 0u;
     for (var y = span.y; y < span.z; y++) {
-        count_m8(&run, sub, min(m[loff(l) + y * lw(l) + span.x], 255u));
+        if ((y & 3u) == 0u) { word = m[pk_word(l, span.x, y)]; }
+        count_m8(&run, sub, pk_byte(word, y));
     }
     flush_m8(wg, li, run);
 }

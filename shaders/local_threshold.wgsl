@@ -2,7 +2,7 @@
 // Mirrors src/cpu/local_threshold.rs: the windows' histograms of M8 =
 // min(M, 255) are sums of the histograms of the cells cut at every window
 // edge (spec::cell_cuts), so each pixel is counted once, not once per window
-// holding it. m + grid -> window_hist -> windows[(first window of l + j*nx + i)
+// holding it. m (M8, column-packed, common.wgsl pk_word) + grid -> window_hist -> windows[(first window of l + j*nx + i)
 // * 4 + {0: min, 1: max, 2: lower median, 3: V3}]. Two entry points:
 // - cells: one workgroup per cell, workgroup_id = (column, row, level),
 //   dispatch (most cells along x, along y, n_levels); it counts the cell in
@@ -63,20 +63,25 @@ fn cells(
         let wy = holding(g.z + g.x, g.y, g.w >> 16u, y0, y1);
         win = vec4<u32>(wx, wy);
     }
-    // Rows lid.y, lid.y + 2, ...; columns lid.x, lid.x + 16, ... of the cell.
+    // Columns lid.x, lid.x + 16, ... of the cell, words (four rows, `m` is
+    // column-packed) lid.y, lid.y + 2, ... of those covering its rows.
     // Runs of equal values (flat regions) are counted locally and added once.
     var run_v = 0u;
     var run_n = 0u;
-    for (var y = y0 + lid.y; y < y1; y += 2u) {
-        let row = loff(l) + y * lw(l);
+    for (var g4 = (y0 >> 2u) + lid.y; g4 * 4u < y1; g4 += 2u) {
+        let r0 = max(g4 * 4u, y0);
+        let r1 = min(g4 * 4u + 4u, y1);
         for (var x = x0 + lid.x; x < x1; x += 16u) {
-            let v = min(m[row + x], 255u);
-            if (v != run_v && run_n != 0u) {
-                atomicAdd(&bins[run_v], run_n);
-                run_n = 0u;
+            let word = m[pk_word(l, x, r0)];
+            for (var y = r0; y < r1; y++) {
+                let v = pk_byte(word, y);
+                if (v != run_v && run_n != 0u) {
+                    atomicAdd(&bins[run_v], run_n);
+                    run_n = 0u;
+                }
+                run_v = v;
+                run_n += 1u;
             }
-            run_v = v;
-            run_n += 1u;
         }
     }
     if (run_n != 0u) { atomicAdd(&bins[run_v], run_n); }

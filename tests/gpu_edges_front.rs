@@ -72,6 +72,11 @@ fn staged_passes_need_the_stage_planes() {
     GradientNmsPass::new(&ctx.device).bind(&ctx.device, &b).unwrap();
 }
 
+/// M8 = min(M, 255): what the GPU keeps of M (`Buffers::m`, column-packed).
+fn m8(m: &Plane<u16>) -> Plane<u8> {
+    Plane::from_vec(m.width, m.height, m.data.iter().map(|&v| v.min(255) as u8).collect()).unwrap()
+}
+
 /// A plane as the u32 words of an atlas level (signed values as their i32 bits).
 fn words<T: Copy + Into<i64>>(p: &Plane<T>) -> Vec<u32> {
     p.data.iter().map(|&v| v.into() as i32 as u32).collect()
@@ -113,7 +118,8 @@ fn gradient_matches_cpu() {
             assert_eq!(got(&st(&b).gx), words(&g.gx2), "gx2 {name} level {l}");
             assert_eq!(got(&st(&b).gy), words(&g.gy2), "gy2 {name} level {l}");
             assert_eq!(got(&st(&b).s), words(&g.s), "S {name} level {l}");
-            assert_eq!(got(&b.m), words(&g.m), "M {name} level {l}");
+            let m = t::download_packed(&ctx, &b, &b.m, l).unwrap();
+            assert_eq!(m, words(&m8(&g.m)), "M8 {name} level {l}");
         }
     }
 }
@@ -133,7 +139,7 @@ fn gradient_extremes() {
         let g = cpu::gradient::gradient(&d);
         assert_eq!(t::download_level(&ctx, &b, &st(&b).gx, 0).unwrap(), words(&g.gx2), "{:?}", d.data);
         assert_eq!(t::download_level(&ctx, &b, &st(&b).gy, 0).unwrap(), words(&g.gy2), "{:?}", d.data);
-        assert_eq!(t::download_level(&ctx, &b, &b.m, 0).unwrap(), words(&g.m), "{:?}", d.data);
+        assert_eq!(t::download_packed(&ctx, &b, &b.m, 0).unwrap(), words(&m8(&g.m)), "{:?}", d.data);
     }
 }
 
@@ -169,7 +175,7 @@ fn gradient_matches_cpu_on_noise() {
     assert_eq!(t::download_level(&ctx, &b, &st(&b).gx, 0).unwrap(), words(&g.gx2));
     assert_eq!(t::download_level(&ctx, &b, &st(&b).gy, 0).unwrap(), words(&g.gy2));
     assert_eq!(t::download_level(&ctx, &b, &st(&b).s, 0).unwrap(), words(&g.s));
-    assert_eq!(t::download_level(&ctx, &b, &b.m, 0).unwrap(), words(&g.m));
+    assert_eq!(t::download_packed(&ctx, &b, &b.m, 0).unwrap(), words(&m8(&g.m)));
 }
 
 #[test]
@@ -235,7 +241,7 @@ fn histogram_matches_cpu() {
         let Case { name, b, cpu, .. } = case(&ctx, c);
         poison(&ctx, &b.hist); // `prepare` must clear it
         for (l, em) in cpu.iter().enumerate() {
-            t::upload_plane(&ctx, &b, &b.m, l, &em.gradient.m);
+            t::upload_packed(&ctx, &b, &b.m, l, &m8(&em.gradient.m));
         }
         t::run(&ctx, &pass, &b).unwrap();
         let hist = t::download(&ctx, &b.hist).unwrap();
@@ -283,15 +289,15 @@ fn gradient_nms_matches_cpu() {
         t::run(&ctx, &pass, &b).unwrap();
         let hist = t::download(&ctx, &b.hist).unwrap();
         for (l, (_, m, nms, h)) in want.iter().enumerate() {
-            assert_eq!(t::download_level(&ctx, &b, &b.m, l).unwrap(), words(m), "M {name} level {l}");
+            assert_eq!(t::download_packed(&ctx, &b, &b.m, l).unwrap(), words(&m8(m)), "M8 {name} level {l}");
             assert_eq!(t::download_packed(&ctx, &b, &b.nms, l).unwrap(), words(nms), "nms {name} level {l}");
             assert_eq!(&hist[l * 256..][..256], &h[..], "hist {name} level {l}");
         }
     }
 }
 
-/// Magnitudes above 255 land in bin 255 (M8 = min(M, 255)), large flat runs
-/// count exactly.
+/// Magnitudes above 255 land in bin 255 (the CPU histogram of M, which clips
+/// itself, equals the GPU's of the M8 it keeps), large flat runs count exactly.
 #[test]
 fn histogram_clips_and_counts_runs() {
     let Some(ctx) = t::context() else { return };
@@ -302,7 +308,7 @@ fn histogram_clips_and_counts_runs() {
         Plane::<u16>::from_vec(w, h, (0..w * h).map(|i| if i % 7 == 0 { 255 + (i % 106) as u16 } else { 3 }).collect())
             .unwrap();
     let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
-    t::upload_plane(&ctx, &b, &b.m, 0, &m);
+    t::upload_packed(&ctx, &b, &b.m, 0, &m8(&m));
     t::run(&ctx, &pass, &b).unwrap();
     let hist = t::download(&ctx, &b.hist).unwrap();
     assert_eq!(&hist[..256], &cpu::histogram::histogram(&m)[..]);
@@ -467,7 +473,7 @@ fn local_threshold_matches_cpu() {
         let Case { name, b, cpu, .. } = case(&ctx, c);
         poison(&ctx, &b.windows);
         for (l, em) in cpu.iter().enumerate() {
-            t::upload_plane(&ctx, &b, &b.m, l, &em.gradient.m);
+            t::upload_packed(&ctx, &b, &b.m, l, &m8(&em.gradient.m));
             // one definition (lfast::spec::WindowLayout) on both paths
             assert_eq!(b.layout.grids[l], em.windows.layout, "{name} level {l}: grid layout");
         }
@@ -507,7 +513,7 @@ fn local_threshold_clips_and_takes_lower_median() {
     for (l, &(lw, lh)) in b.layout.sizes.iter().enumerate() {
         let m = Plane::<u16>::from_vec(lw, lh, (0..lw * lh).map(|i| m0.data[(i * 7 % (w * h)) as usize]).collect())
             .unwrap();
-        t::upload_plane(&ctx, &b, &b.m, l, &m);
+        t::upload_packed(&ctx, &b, &b.m, l, &m8(&m));
         let g = cpu::local_threshold::local_threshold(&m);
         want.extend(g.stats.iter().flat_map(|s| [s.min as u32, s.max as u32, s.median as u32, s.v3()]));
     }
@@ -525,7 +531,7 @@ fn classify_matches_cpu() {
         let mut windows = Vec::new();
         let mut otsu = Vec::new();
         for (l, em) in cpu.iter().enumerate() {
-            t::upload_plane(&ctx, &b, &b.m, l, &em.gradient.m);
+            t::upload_packed(&ctx, &b, &b.m, l, &m8(&em.gradient.m));
             t::upload_packed(&ctx, &b, &b.nms, l, &em.nms);
             otsu.push(t1_word(em));
             windows.extend(window_words(em));
@@ -540,8 +546,10 @@ fn classify_matches_cpu() {
 }
 
 /// Every class boundary of SPEC 6 on literal magnitudes: one 1-window image,
-/// M = 0..=360 along a row, all NMS survivors, fixed T1 and V3 (the window's
-/// statistics are uploaded directly), several alphas; also T1 = 0 (no edges).
+/// M = 0..=360 along a row (the GPU is given M8 = min(M, 255), as the pipeline
+/// keeps it, and must answer as the CPU does for M), all NMS survivors, fixed T1
+/// and V3 (the window's statistics are uploaded directly), several alphas;
+/// also T1 = 0 (no edges). T1 = k + 1 <= 255: Otsu's k is at most 254.
 #[test]
 fn classify_boundaries() {
     let Some(ctx) = t::context() else { return };
@@ -552,10 +560,10 @@ fn classify_boundaries() {
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         let m = Plane::<u16>::from_vec(w, h, (0..w * h).map(|i| (i % w) as u16).collect()).unwrap();
         let keep = Plane::<u8>::from_vec(w, h, (0..w * h).map(|i| (i % 5 != 4) as u8).collect()).unwrap();
-        t::upload_plane(&ctx, &b, &b.m, 0, &m);
+        t::upload_packed(&ctx, &b, &b.m, 0, &m8(&m));
         t::upload_packed(&ctx, &b, &b.nms, 0, &keep);
         let n_windows = b.layout.total_windows as usize;
-        for (t1, v3) in [(41u32, 100u32), (31, 60), (300, 765), (1, 0), (256, 3), (0, 100)] {
+        for (t1, v3) in [(41u32, 100u32), (31, 60), (255, 765), (1, 0), (255, 3), (128, 700), (0, 100)] {
             // The pass reads only V3 of a window: write it directly (min, max
             // and median could not give every V3 with min = max = median).
             let win: Vec<u32> = (0..n_windows).flat_map(|_| [0, 0, 0, v3]).collect();

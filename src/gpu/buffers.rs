@@ -164,7 +164,8 @@ pub struct Buffers {
     pub denoised: wgpu::Buffer,
     /// gx2, gy2 and S: allocated only by [`Buffers::with_stage_planes`].
     pub stage: Option<StagePlanes>,
-    /// M.
+    /// M8 = min(M, 255), column-packed as `classes`: all that the histograms,
+    /// the windows and classify need of M (docs/algorithm.md, stage 6).
     pub m: wgpu::Buffer,
     /// NMS survivors (0/1), column-packed as `classes`.
     pub nms: wgpu::Buffer,
@@ -330,7 +331,7 @@ impl Buffers {
             mask: px("mask"),
             denoised: buf("denoised", allocated.packed * 4),
             stage: stage_planes.then(|| StagePlanes { gx: px("gx"), gy: px("gy"), s: px("s") }),
-            m: px("m"),
+            m: buf("m", allocated.packed * 4),
             nms: buf("nms", allocated.packed * 4),
             hist: buf("hist", 256 * 4 * n_levels),
             otsu: buf("otsu", 4 * n_levels),
