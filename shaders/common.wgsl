@@ -85,7 +85,8 @@ fn tile_pixel(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
     return vec3<u32>(o.x + li.x, o.y + li.y, o.z);
 }
 
-// tile_origin of tile k (< COLUMN_TILES) of a column or row pass's workgroup wg.
+// tile_origin of tile k (< COLUMN_TILES) of a column pass's workgroup wg (and
+// of blur's horizontal pass, which takes 4x4 blocks of the tile).
 fn workgroup_tile(wg: vec3<u32>, k: u32) -> vec3<u32> {
     return tile_origin((wg.x + wg.y * P.tile_row) * COLUMN_TILES + k);
 }
@@ -133,14 +134,6 @@ fn list_entry(lane: u32, row: u32) -> u32 { return (lane << 4u) | row; }
 fn list_pixel(wg: vec3<u32>, e: u32) -> vec3<u32> {
     let p = tile_column(wg, vec3<u32>(e >> 4u, 0u, 0u));
     return vec3<u32>(p.x, p.y + (e & 15u), p.z);
-}
-
-// Row passes: as column passes, with one invocation per row of a tile that
-// walks the row's TILE pixels. Returns (left column, y, level) of this invocation.
-fn tile_row_segment(wg: vec3<u32>, li: vec3<u32>) -> vec3<u32> {
-    let o = workgroup_tile(wg, li.x / TILE);
-    if (o.x == NO_TILE) { return o; }
-    return vec3<u32>(o.x, o.y + li.x % TILE, o.z);
 }
 
 // One keypoint: GpuKeypoint in src/gpu/buffers.rs, 12 words (48 bytes).

@@ -20,7 +20,12 @@ const PI: f32 = 3.14159265358979323846;
 @group(0) @binding(4) var<storage, read> patterns: array<vec4<i32>>;
 @group(0) @binding(5) var<storage, read_write> descriptors: array<u32>;
 
-fn px(l: u32, x: i32, y: i32) -> u32 { return smoothed[clamped(l, x, y)]; }
+// Pixel (x, y) of level l, clamped into the level; `smoothed` is
+// column-packed (common.wgsl pk_word).
+fn px(l: u32, x: i32, y: i32) -> u32 {
+    let c = clamped_xy(l, x, y);
+    return pk_byte(smoothed[pk_word(l, c.x, c.y)], c.y);
+}
 
 // OpenCV's per-keypoint rotation: x' = x cos - y sin, y' = x sin + y cos in
 // f32, rounded half to even (WGSL round). The GPU's sin/cos may differ from

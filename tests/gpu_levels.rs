@@ -220,7 +220,7 @@ fn blur_matches_cpu_on_every_level() {
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in lv.iter().enumerate() {
             let want: Vec<u32> = blur::gaussian_blur(p, &blur::ORB_KERNEL).data.iter().map(|&v| v as u32).collect();
-            assert_eq!(t::download_level(&ctx, &b, &b.smooth, l).unwrap(), want, "{w}x{h} level {l}");
+            assert_eq!(t::download_packed(&ctx, &b, &b.smooth, l).unwrap(), want, "{w}x{h} level {l}");
         }
     }
     // a hand-checked case: an impulse spreads as the outer product of the kernel
@@ -230,7 +230,7 @@ fn blur_matches_cpu_on_every_level() {
     img[4 * 9 + 4] = 255;
     t::upload_packed(&ctx, &b, &b.gray, 0, &Plane::from_vec(9, 9, img).unwrap());
     t::run(&ctx, &pass, &b).unwrap();
-    let got = t::download_level(&ctx, &b, &b.smooth, 0).unwrap();
+    let got = t::download_packed(&ctx, &b, &b.smooth, 0).unwrap();
     let k = blur::ORB_KERNEL;
     for y in 0..9 {
         for x in 0..9 {
@@ -395,7 +395,7 @@ fn orientation_of_literal_directions() {
 fn upload_smooth(ctx: &GpuContext, b: &Buffers, levels: &[Plane<u8>]) -> Vec<Plane<u8>> {
     let smooth: Vec<Plane<u8>> = levels.iter().map(|p| blur::gaussian_blur(p, &blur::ORB_KERNEL)).collect();
     for (l, p) in smooth.iter().enumerate() {
-        t::upload_plane(ctx, b, &b.smooth, l, p);
+        t::upload_packed(ctx, b, &b.smooth, l, p);
     }
     smooth
 }
@@ -440,9 +440,9 @@ fn orb_one_bit_by_hand() {
     let b = Buffers::new(&ctx.device, &cfg, 41, 41).unwrap();
     let kp = GpuKeypoint { px: 20, py: 20, bin: 0, ..Default::default() };
     upload_keypoints(&ctx, &b, &[kp]);
-    let mut img = vec![100u32; 41 * 41];
+    let mut img = vec![100u8; 41 * 41];
     img[25 * 41 + 29] = 101;
-    t::upload_level(&ctx, &b, &b.smooth, 0, &img);
+    t::upload_packed(&ctx, &b, &b.smooth, 0, &Plane::from_vec(41, 41, img).unwrap());
     t::run(&ctx, &pass, &b).unwrap();
     let d = download_descriptors(&ctx, &b, 1)[0];
     assert_eq!(d[0], 1);

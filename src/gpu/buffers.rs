@@ -210,9 +210,10 @@ pub struct Buffers {
     pub counters: wgpu::Buffer,
     /// See [`indirect`].
     pub indirect: wgpu::Buffer,
-    /// 7x7-blurred levels (SPEC 11).
+    /// 7x7-blurred levels (SPEC 11), column-packed as `classes`.
     pub smooth: wgpu::Buffer,
-    /// Horizontal blur pass output.
+    /// Horizontal blur pass output: Q8 sums, two rows of a column per word
+    /// (shaders/blur.wgsl), in the first half of each level's atlas range.
     pub blur_tmp: wgpu::Buffer,
     /// Rotated patterns: per bin 256 pairs of four i32 (x1, y1, x2, y2).
     pub patterns: wgpu::Buffer,
@@ -353,7 +354,7 @@ impl Buffers {
             descriptors: buf("descriptors", cap * DESC_WORDS * 4),
             counters: buf("counters", counter::LEN as u64 * 4),
             indirect: init("indirect", bytemuck::cast_slice(&indirect_init), storage | wgpu::BufferUsages::INDIRECT),
-            smooth: px("smooth"),
+            smooth: buf("smooth", allocated.packed * 4),
             blur_tmp: px("blur_tmp"),
             patterns: init("patterns", bytemuck::cast_slice(&patterns), storage),
             angle_bounds: init("angle_bounds", bytemuck::cast_slice(&angle_bounds), storage),
