@@ -13,31 +13,36 @@ const HALF_PATCH: i32 = 15;
 // OpenCV ORB's umax: half-width of row v of the radius-15 disc (cpu::orientation::UMAX).
 const UMAX: array<i32, 16> = array<i32, 16>(15, 15, 15, 15, 14, 14, 14, 13, 13, 12, 11, 10, 9, 8, 6, 3);
 
+// `gray` is column-packed (common.wgsl pk_word).
 @group(0) @binding(1) var<storage, read> gray: array<u32>;
 @group(0) @binding(2) var<storage, read_write> keypoints: array<Kp>;
 @group(0) @binding(3) var<storage, read> counters: array<u32>;
 // Per bin the Q8 direction (cos, sin) of its upper boundary (AngleBins::bounds).
 @group(0) @binding(4) var<storage, read> angle_bounds: array<vec2<i32>>;
 
-// Pixel (x, y) of level l, clamped into the level; `gray` is column-packed
-// (common.wgsl pk_word).
-fn px(l: u32, x: i32, y: i32) -> i32 {
-    let c = clamped_xy(l, x, y);
-    return i32(pk_byte(gray[pk_word(l, c.x, c.y)], c.y));
-}
-
-// This invocation's share of (m10, m01) over the disc around (x, y): every
-// 64th pixel of the 31x31 square, those outside the disc (|u| > UMAX[|v|])
-// skipped; reads clamped: the CPU's border branch, which its test shows
-// equal to the interior one. The whole sums are below 2^21 in magnitude.
+// This invocation's share of (m10, m01) over the disc around (x, y) (those
+// pixels of the 31x31 square with |u| <= UMAX[|v|]): lane k < 62 takes column
+// u = k % 31 - 15 and half of its rows (v <= 0 for k < 31, v > 0 after), and
+// walks them with the column's packed word cached, a read per four rows.
+// Reads clamp: the CPU's border branch, which its test shows equal to the
+// interior one. The whole sums are below 2^21 in magnitude.
 fn moments_part(l: u32, x: i32, y: i32, lane: u32) -> vec2<i32> {
     var m10 = 0;
     var m01 = 0;
-    for (var k = lane; k < 961u; k += 64u) {
-        let u = i32(k % 31u) - HALF_PATCH;
-        let v = i32(k / 31u) - HALF_PATCH;
+    if (lane >= 62u) { return vec2(0, 0); }
+    let u = i32(lane % 31u) - HALF_PATCH;
+    let top = lane < 31u;
+    let cx = clamped_xy(l, x + u, 0).x;
+    var cg = 0xffffffffu;
+    var cw = 0u;
+    for (var v = select(1, -HALF_PATCH, top); v <= select(HALF_PATCH, 0, top); v++) {
         if (abs(u) <= UMAX[abs(v)]) {
-            let p = px(l, x + u, y + v);
+            let r = clamped_xy(l, 0, y + v).y;
+            if ((r >> 2u) != cg) {
+                cw = gray[pk_word(l, cx, r)];
+                cg = r >> 2u;
+            }
+            let p = i32(pk_byte(cw, r));
             m10 += u * p;
             m01 += v * p;
         }
