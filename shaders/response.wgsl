@@ -1,7 +1,7 @@
 // SPEC 9: Harris corner response on D (7x7 block, 3x3 Sobel, k = 0.04), as
 // OpenCV ORB's HARRIS_SCORE. Mirrors src/cpu/response.rs.
 // `cand` (1 = candidate; column-packed, common.wgsl pk_word) + `denoised` -> `resp` (f32 bits) at candidates, 0
-// elsewhere. A column pass, all levels in one dispatch (over the tile list); the
+// elsewhere (the pass clears `resp` first). A column pass, all levels in one dispatch (over the tile list); the
 // response itself runs on the workgroup's compacted candidates (see main).
 //
 // Bit-identical to the CPU: the structure sums are exact integers, and the
@@ -105,8 +105,8 @@ fn structure_sums(l: u32, x: i32, y: i32) -> vec3<i32> {
 }
 
 // Work-efficient: a column pass (tile_column) that lists its four tiles'
-// candidates in `todo` (workgroup memory) as it walks them, writing 0 at every
-// other pixel; after one barrier the workgroup's invocations take the list
+// candidates in `todo` (workgroup memory) as it walks them (the pass clears
+// `resp` before it runs, so every other pixel holds 0); after one barrier the workgroup's invocations take the list
 // side by side and write the responses, so the 9x9 window and the formula run
 // in as few SIMD lanes / warps as there are candidates. Entries:
 // list_entry (common.wgsl).
@@ -122,11 +122,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     for (var y = span.y; y < span.z; y++) {
         // `cand` is column-packed: its word once per four rows
         if ((y & 3u) == 0u) { word = cand[pk_word(l, span.x, y)]; }
-        let i = loff(l) + y * lw(l) + span.x;
         if (pk_byte(word, y) != 0u) {
             todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
-        } else {
-            resp[i] = 0u;
         }
     }
     workgroupBarrier();

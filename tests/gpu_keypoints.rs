@@ -122,6 +122,8 @@ fn response_matches_cpu_on_real_candidates() {
             t::upload_packed(&ctx, &b, &b.denoised, l, &lv.denoised);
             t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(lv.denoised.width, lv.denoised.height, &lv.cands));
         }
+        // stale responses: the pass must leave 0 at every pixel that is no candidate
+        t::upload(&ctx, &b.resp, &vec![0xdead_beefu32; (b.resp.size() / 4) as usize]);
         t::run(&ctx, &pass, &b).unwrap();
         for (l, lv) in levels.iter().enumerate() {
             let w = lv.denoised.width;

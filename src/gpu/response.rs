@@ -18,5 +18,8 @@ simple_pass! {
         "denoised" = denoised,
         "resp" = resp,
     }
-    dispatch |b| Groups::Direct(b.layout.column_groups())
+    dispatch |b| Groups::Direct(b.layout.column_groups());
+    // 0 at every pixel that is no candidate (a memset: cheaper than a store
+    // per pixel from the shader)
+    clear resp
 }
