@@ -77,31 +77,60 @@ fn px(l: u32, x: i32, y: i32) -> i32 {
     return i32(pk_byte(denoised[pk_word(l, cx, cy)], cy));
 }
 
+// (Ix², Iy², IxIy) of the 3x3 Sobel at the centre of the 3x3 a (row above),
+// b (centre row: only its ends count), c (row below), each (left, centre, right).
+fn sobel_terms(a: vec3<i32>, b0: i32, b2: i32, c: vec3<i32>) -> vec3<i32> {
+    let ix = (b2 - b0) * 2 + (a.z - a.x) + (c.z - c.x);
+    let iy = (c.y - a.y) * 2 + (c.x - a.x) + (c.z - a.z);
+    return vec3(ix * ix, iy * iy, ix * iy);
+}
+
+// Row y's nine pixels x - 4 .. x + 4 of level l, clamped, as three vec3.
+fn row9(l: u32, x: i32, y: i32) -> array<vec3<i32>, 3> {
+    return array<vec3<i32>, 3>(
+        vec3(px(l, x - 4, y), px(l, x - 3, y), px(l, x - 2, y)),
+        vec3(px(l, x - 1, y), px(l, x, y), px(l, x + 1, y)),
+        vec3(px(l, x + 2, y), px(l, x + 3, y), px(l, x + 4, y)));
+}
+
+// The seven Sobel terms of block row b (rows a above and c below), summed.
+// Written out with constant indices: an array indexed in a loop is gathered
+// lane by lane on lavapipe (and may leave registers on real GPUs).
+fn row_terms(a: array<vec3<i32>, 3>, b: array<vec3<i32>, 3>, c: array<vec3<i32>, 3>) -> vec3<i32> {
+    let a0 = a[0];
+    let a1 = a[1];
+    let a2 = a[2];
+    let b0 = b[0];
+    let b1 = b[1];
+    let b2 = b[2];
+    let c0 = c[0];
+    let c1 = c[1];
+    let c2 = c[2];
+    // centre columns x - 3 .. x + 3 (window columns 1 .. 7)
+    return sobel_terms(a0, b0.x, b0.z, c0)
+        + sobel_terms(vec3(a0.yz, a1.x), b0.y, b1.x, vec3(c0.yz, c1.x))
+        + sobel_terms(vec3(a0.z, a1.xy), b0.z, b1.y, vec3(c0.z, c1.xy))
+        + sobel_terms(a1, b1.x, b1.z, c1)
+        + sobel_terms(vec3(a1.yz, a2.x), b1.y, b2.x, vec3(c1.yz, c2.x))
+        + sobel_terms(vec3(a1.z, a2.xy), b1.z, b2.y, vec3(c1.z, c2.xy))
+        + sobel_terms(a2, b2.x, b2.z, c2);
+}
+
 // The integer structure-tensor sums (a, b, c) = (ΣIx², ΣIy², ΣIxIy) over the
-// 7x7 block centred on (x, y), reads clamped, as structure_sums. The 9x9
-// footprint is read once into `win` (win[j][i] = D(x - 4 + i, y - 4 + j)).
+// 7x7 block centred on (x, y), reads clamped, as structure_sums: the 9x9
+// footprint is read a row at a time, three rows kept (sums of exact integers,
+// so the order does not matter).
 fn structure_sums(l: u32, x: i32, y: i32) -> vec3<i32> {
-    var win: array<array<i32, 9>, 9>;
-    for (var j = 0; j < 9; j++) {
-        for (var i = 0; i < 9; i++) {
-            win[j][i] = px(l, x - R - 1 + i, y - R - 1 + j);
-        }
+    var up = row9(l, x, y - R - 1);
+    var mid = row9(l, x, y - R);
+    var sums = vec3(0);
+    for (var by = -R; by <= R; by++) {
+        let down = row9(l, x, y + by + 1);
+        sums += row_terms(up, mid, down);
+        up = mid;
+        mid = down;
     }
-    var a = 0;
-    var b = 0;
-    var c = 0;
-    for (var by = 1; by <= 2 * R + 1; by++) {
-        for (var bx = 1; bx <= 2 * R + 1; bx++) {
-            let ix = (win[by][bx + 1] - win[by][bx - 1]) * 2 + (win[by - 1][bx + 1] - win[by - 1][bx - 1])
-                + (win[by + 1][bx + 1] - win[by + 1][bx - 1]);
-            let iy = (win[by + 1][bx] - win[by - 1][bx]) * 2 + (win[by + 1][bx - 1] - win[by - 1][bx - 1])
-                + (win[by + 1][bx + 1] - win[by - 1][bx + 1]);
-            a += ix * ix;
-            b += iy * iy;
-            c += ix * iy;
-        }
-    }
-    return vec3(a, b, c);
+    return sums;
 }
 
 // Work-efficient: a column pass (tile_column) that lists its four tiles'
