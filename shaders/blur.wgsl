@@ -41,12 +41,9 @@ fn taps(v0: u32, v1: u32, v2: u32, v3: u32, v4: u32, v5: u32, v6: u32) -> u32 {
 // The seven taps over the four rows of packed words v0..v6 (byte r of each
 // word is row r of its column).
 fn taps4(v0: u32, v1: u32, v2: u32, v3: u32, v4: u32, v5: u32, v6: u32) -> vec4<u32> {
-    let sh = vec4<u32>(0u, 8u, 16u, 24u);
-    let m = vec4<u32>(0xffu);
-    return ORB_KERNEL[0] * ((vec4(v0) >> sh) & m) + ORB_KERNEL[1] * ((vec4(v1) >> sh) & m)
-        + ORB_KERNEL[2] * ((vec4(v2) >> sh) & m) + ORB_KERNEL[3] * ((vec4(v3) >> sh) & m)
-        + ORB_KERNEL[4] * ((vec4(v4) >> sh) & m) + ORB_KERNEL[5] * ((vec4(v5) >> sh) & m)
-        + ORB_KERNEL[6] * ((vec4(v6) >> sh) & m);
+    return ORB_KERNEL[0] * pk_rows(v0) + ORB_KERNEL[1] * pk_rows(v1) + ORB_KERNEL[2] * pk_rows(v2)
+        + ORB_KERNEL[3] * pk_rows(v3) + ORB_KERNEL[4] * pk_rows(v4) + ORB_KERNEL[5] * pk_rows(v5)
+        + ORB_KERNEL[6] * pk_rows(v6);
 }
 
 // `blur_tmp` holds two rows of a column per word, row 2k in the low half of

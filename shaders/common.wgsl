@@ -122,6 +122,11 @@ fn pk_word(l: u32, x: u32, y: u32) -> u32 { return P.tiles[l].w + (y >> 2u) * lw
 fn pk_byte(word: u32, y: u32) -> u32 { return (word >> ((y & 3u) * 8u)) & 0xffu; }
 // Row y's value v in its place of a word being built (OR the four rows together).
 fn pk_place(v: u32, y: u32) -> u32 { return v << ((y & 3u) * 8u); }
+// pk_byte of the words of three or four neighbouring columns, at row y.
+fn pk_byte3(words: vec3<u32>, y: u32) -> vec3<u32> { return (words >> vec3<u32>((y & 3u) * 8u)) & vec3<u32>(0xffu); }
+fn pk_byte4(words: vec4<u32>, y: u32) -> vec4<u32> { return (words >> vec4<u32>((y & 3u) * 8u)) & vec4<u32>(0xffu); }
+// All four rows of a word: row 4k + r in component r.
+fn pk_rows(word: u32) -> vec4<u32> { return (vec4<u32>(word) >> vec4<u32>(0u, 8u, 16u, 24u)) & vec4<u32>(0xffu); }
 // Whether row y completes the word being built by a walk that ends before row
 // `end`: the last of its four rows, or the walk's last row.
 fn pk_complete(y: u32, end: u32) -> bool { return (y & 3u) == 3u || y + 1u == end; }

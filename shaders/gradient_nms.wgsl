@@ -32,7 +32,7 @@ fn d4(l: u32, x: u32, y: u32, cg: ptr<function, u32>, cw: ptr<function, vec4<u32
         );
         *cg = yc >> 2u;
     }
-    return vec4<i32>((*cw >> vec4<u32>((yc & 3u) * 8u)) & vec4<u32>(0xffu));
+    return vec4<i32>(pk_byte4(*cw, yc));
 }
 
 // (gx2, gy2) at columns x-1, x, x+1 from D rows y (a) and y + 1 (c): SPEC 2's

@@ -116,18 +116,14 @@ fn link(i: u32, t: u32) {
 
 // The packed words of columns x-1, x, x+1 holding row y of level l (the
 // column's own word in .y); a column outside the level reads as 0 (class
-// NONE in every row: never active).
+// NONE in every row: never active). rules.wgsl's words3, over `ruled` (a
+// shader function cannot take a storage buffer as an argument).
 fn words3(l: u32, x: u32, y: u32) -> vec3<u32> {
     let k = pk_word(l, x, y);
     var r = vec3<u32>(0u, ruled[k], 0u);
     if (x > 0u) { r.x = ruled[k - 1u]; }
     if (x + 1u < lw(l)) { r.z = ruled[k + 1u]; }
     return r;
-}
-
-// Row y's classes at columns x-1, x, x+1 from their words.
-fn row3(words: vec3<u32>, y: u32) -> vec3<u32> {
-    return (words >> vec3<u32>((y & 3u) * 8u)) & vec3<u32>(0xffu);
 }
 
 fn active3(c: vec3<u32>) -> vec3<bool> {
@@ -157,11 +153,11 @@ fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     let w = lw(l);
     // classes of the row above at x-1, x, x+1 (none above row 0)
     var up = vec3<bool>(false);
-    if (c.y > 0u) { up = active3(row3(words3(l, c.x, c.y - 1u), c.y - 1u)); }
+    if (c.y > 0u) { up = active3(pk_byte3(words3(l, c.x, c.y - 1u), c.y - 1u)); }
     var words = vec3<u32>(0u);
     for (var y = c.y; y < c.z; y++) {
         if ((y & 3u) == 0u) { words = words3(l, c.x, y); }
-        let cur = active3(row3(words, y));
+        let cur = active3(pk_byte3(words, y));
         if (cur.y) {
             let i = loff(l) + y * w + c.x;
             // first and second neighbour to join (NONE: none)

@@ -63,7 +63,7 @@ fn row3(l: u32, xl: u32, x: u32, xr: u32, y: u32, cg: ptr<function, u32>, cw: pt
         *cw = vec3<u32>(src[pk_word(l, xl, yc)], src[pk_word(l, x, yc)], src[pk_word(l, xr, yc)]);
         *cg = yc >> 2u;
     }
-    return (*cw >> vec3<u32>((yc & 3u) * 8u)) & vec3<u32>(0xffu);
+    return pk_byte3(*cw, yc);
 }
 
 // A column pass (tile_column): each invocation walks one column of a tile

@@ -29,11 +29,6 @@ fn words3(l: u32, x: u32, y: i32) -> vec3<u32> {
     return r;
 }
 
-// Row y's classes of the three columns, from their words.
-fn row3(wd: vec3<u32>, y: i32) -> vec3<u32> {
-    return vec3<u32>(pk_byte(wd.x, u32(y)), pk_byte(wd.y, u32(y)), pk_byte(wd.z, u32(y)));
-}
-
 // True iff one of the 8 neighbours of the centre of the 3x3 window (a above,
 // b its row, c below) has class `k`.
 fn has_neighbour(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>, k: u32) -> bool {
@@ -60,13 +55,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let l = span.w;
     let x = span.x;
     let y0 = i32(span.y);  // a multiple of 4: the first row of its words
-    var a = row3(words3(l, x, y0 - 1), y0 - 1);
+    var a = pk_byte3(words3(l, x, y0 - 1), u32(y0 - 1));
     var wd = words3(l, x, y0);
-    var b = row3(wd, y0);
+    var b = pk_byte3(wd, u32(y0));
     var word = 0u;
     for (var y = y0; y < i32(span.z); y++) {
         if (((y + 1) & 3) == 0) { wd = words3(l, x, y + 1); }
-        let c = row3(wd, y + 1);
+        let c = pk_byte3(wd, u32(y + 1));
         word |= pk_place(rule_at(a, b, c), u32(y));
         if (pk_complete(u32(y), span.z)) {
             ruled[pk_word(l, x, u32(y))] = word;
