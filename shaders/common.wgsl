@@ -177,18 +177,36 @@ fn isqrt(v: u32) -> u32 {
 // `magnitude` in src/cpu/gradient.rs.
 fn magnitude(sq: u32) -> u32 { return isqrt(sq) >> 1u; }
 
-// Neighbour offsets (first.xy, second.xy) of the direction sector of (gx2, gy2).
-// tan(22.5°) ≈ 13573/32768 and tan(67.5°) ≈ 79109/32768; |g| <= 510 keeps the
-// products far below 2^32.
-fn sector(gx2: i32, gy2: i32) -> vec4<i32> {
+// The direction sector of (gx2, gy2) as booleans: horizontal, vertical (never
+// both), and for the diagonals whether the signs are equal. tan(22.5°) ≈
+// 13573/32768 and tan(67.5°) ≈ 79109/32768; |g| <= 510 keeps the products far
+// below 2^32. (`sector_code` in src/cpu/fused.rs.)
+fn sector_tests(gx2: i32, gy2: i32) -> vec3<bool> {
     let ax = u32(abs(gx2));
     let ay = u32(abs(gy2));
-    if (ay * 32768u < 13573u * ax) {
+    return vec3<bool>(ay * 32768u < 13573u * ax, ay * 32768u > 79109u * ax, (gx2 > 0) == (gy2 > 0));
+}
+
+// Neighbour offsets (first.xy, second.xy) of the direction sector of (gx2, gy2).
+fn sector(gx2: i32, gy2: i32) -> vec4<i32> {
+    let t = sector_tests(gx2, gy2);
+    if (t.x) {
         return vec4(-1, 0, 1, 0);
-    } else if (ay * 32768u > 79109u * ax) {
+    } else if (t.y) {
         return vec4(0, -1, 0, 1);
-    } else if ((gx2 > 0) == (gy2 > 0)) {
+    } else if (t.z) {
         return vec4(-1, -1, 1, 1);
     }
     return vec4(1, -1, -1, 1);
+}
+
+// The values of the two `sector` neighbours (first, second) of the centre of a
+// 3x3 window given as rows up, mid, down (columns x-1, x, x+1): selects on
+// the sector tests, no indexed array (a private array indexed by a computed
+// value is read lane by lane on a SIMD software rasteriser).
+fn sector_pair(gx2: i32, gy2: i32, up: vec3<u32>, mid: vec3<u32>, down: vec3<u32>) -> vec2<u32> {
+    let t = sector_tests(gx2, gy2);
+    let diag = select(vec2<u32>(up.z, down.x), vec2<u32>(up.x, down.z), t.z);
+    let vh = select(vec2<u32>(up.y, down.y), vec2<u32>(mid.x, mid.z), t.x);
+    return select(diag, vh, t.x || t.y);
 }

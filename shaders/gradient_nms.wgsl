@@ -63,7 +63,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let l = span.w;
     let x = span.x;
     let h = lh(l);
-    let sub = (li.x / TILE) * 256u;
+    let sub = m8_sub(wg, li);
     var run = vec2<u32>(0u);
     if (span.y < span.z) {
         let cols = vec3<bool>(x > 0u, true, x + 1u < lw(l));
@@ -89,14 +89,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             let gn = grad3(dnext, dnn);
             let down = s3(gn, select(none, cols, y + 1u < h));
             let v = mid.y;
-            var keep = 0u;
-            if (v != 0u) {
-                let o = sector(g[1].x, g[1].y);
-                var rows = array<vec3<u32>, 3>(up, mid, down);
-                let a = rows[o.y + 1][o.x + 1];
-                let b = rows[o.w + 1][o.z + 1];
-                keep = select(0u, 1u, v > a && v >= b);
-            }
+            // v > first >= 0 keeps only S > 0 (SPEC 3 suppresses S = 0)
+            let ab = sector_pair(g[1].x, g[1].y, up, mid, down);
+            let keep = select(0u, 1u, v > ab.x && v >= ab.y);
             let m8 = min(magnitude(v), 255u);
             // `m` and `nms` are column-packed: a word each per four rows
             mags |= pk_place(m8, y);
@@ -114,5 +109,5 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             dnext = dnn;
         }
     }
-    flush_m8(wg, li, run);
+    flush_m8(wg, li, sub, run);
 }

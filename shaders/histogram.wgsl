@@ -14,12 +14,12 @@
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
     let l = span.w;
-    let sub = (li.x / TILE) * 256u;
+    let sub = m8_sub(wg, li);
     var run = vec2<u32>(0u);
     var word = 0u;
     for (var y = span.y; y < span.z; y++) {
         if ((y & 3u) == 0u) { word = m[pk_word(l, span.x, y)]; }
         count_m8(&run, sub, pk_byte(word, y));
     }
-    flush_m8(wg, li, run);
+    flush_m8(wg, li, sub, run);
 }
