@@ -9,42 +9,70 @@
 @group(0) @binding(1) var<storage, read> edges: array<u32>;
 @group(0) @binding(2) var<storage, read> mask: array<u32>;
 @group(0) @binding(3) var<storage, read_write> cand: array<u32>;
+@group(0) @binding(4) var<storage, read_write> edge_bits: array<u32>;
 
 const EDGE: u32 = 255u;
 
-// The radius-3 Bresenham circle in FAST order (index 0 straight up, clockwise).
-const CIRCLE = array<vec2<i32>, 16>(
-    vec2(0, -3), vec2(1, -3), vec2(2, -2), vec2(3, -1), vec2(3, 0), vec2(3, 1), vec2(2, 2), vec2(1, 3),
-    vec2(0, 3), vec2(-1, 3), vec2(-2, 2), vec2(-3, 1), vec2(-3, 0), vec2(-3, -1), vec2(-2, -2), vec2(-1, -3));
+// The radius-3 Bresenham circle in FAST order (index 0 straight up, clockwise;
+// CIRCLE in src/cpu/lfast.rs): x offsets 0, 1, 2, 3, 3, 3, 2, 1, then the same
+// negated; the y offset of index t is the x offset of index t + 12 (mod 16).
+// As arithmetic (offset + 3 in a nibble) rather than a constant array, which
+// an index computed per pixel would read lane by lane.
+fn circle_dx(t: u32) -> i32 {
+    let d = i32((0x45666543u >> ((t & 7u) * 4u)) & 15u) - 3;
+    return select(-d, d, t < 8u);
+}
+fn circle_dy(t: u32) -> i32 { return circle_dx((t + 12u) & 15u); }
 
-// 1 iff (x, y) of level l is an edge. Callers stay >= 7 pixels inside p's
-// border, so no clamping is needed (as on the CPU).
-// `edges` is column-packed (common.wgsl pk_word).
-fn is_edge(l: u32, x: i32, y: i32) -> u32 {
-    return u32(pk_byte(edges[pk_word(l, u32(x), u32(y))], u32(y)) == EDGE);
+// Edge windows (entry `windows`): one word per column of every tile, bit j =
+// row 16 ty - 8 + j of that column (1 = edge; rows outside the level 0), for
+// the tile row ty: every pixel the test of a pixel of that tile row reads (up
+// to 7 rows away) is in its column's word, so a column costs one load.
+fn window_word(l: u32, x: u32, ty: u32) -> u32 {
+    return (P.tiles[l].x + ty * P.tiles[l].y + x / TILE) * TILE + x % TILE;
+}
+
+// Rows y - r .. y + r of column x (bit j = row y - r + j) for a pixel of tile
+// row ty = y / 16 (r <= 7).
+fn column_bits(l: u32, x: i32, y: u32, r: u32) -> u32 {
+    let ty = y / TILE;
+    return (edge_bits[window_word(l, u32(x), ty)] >> (y % TILE + 8u - r)) & ((1u << (2u * r + 1u)) - 1u);
 }
 
 // Step 4: does circle point t support the corner at p? q = 2t - p supports it
 // when it is an edge, or when at least `support` of its 8 neighbours are.
 fn supports(l: u32, px: i32, py: i32, t: u32, support: u32) -> bool {
-    let q = vec2(px, py) + 2 * CIRCLE[t];
-    if (is_edge(l, q.x, q.y) == 1u) { return true; }
-    var n = 0u;
-    for (var dy = -1; dy <= 1; dy++) {
-        for (var dx = -1; dx <= 1; dx++) {
-            if (dx != 0 || dy != 0) { n += is_edge(l, q.x + dx, q.y + dy); }
-        }
-    }
-    return n >= support;
+    let qx = px + 2 * circle_dx(t);
+    let qy = u32(py + 2 * circle_dy(t));
+    // rows qy-1..qy+1 of columns qx-1, qx, qx+1, read at p's tile row
+    let sh = (py % i32(TILE)) + 8 + (i32(qy) - py) - 1;
+    let ty = u32(py) / TILE;
+    let left = (edge_bits[window_word(l, u32(qx - 1), ty)] >> u32(sh)) & 7u;
+    let mid = (edge_bits[window_word(l, u32(qx), ty)] >> u32(sh)) & 7u;
+    let right = (edge_bits[window_word(l, u32(qx + 1), ty)] >> u32(sh)) & 7u;
+    if ((mid & 2u) != 0u) { return true; }
+    return countOneBits(left) + countOneBits(right) + countOneBits(mid) >= support;
 }
 
-// The 16-bit mask of edge pixels on the circle around p (bit i = CIRCLE[i]).
+// Bit i of the circle mask from bit j of a 7-row column window.
+fn cbit(c: u32, j: u32, i: u32) -> u32 { return ((c >> j) & 1u) << i; }
+
+// The 16-bit mask of edge pixels on the circle around p (bit i = circle point
+// i): rows py-3..py+3 of columns px-3..px+3, a load each.
 fn circle_mask(l: u32, px: i32, py: i32) -> u32 {
-    var m = 0u;
-    for (var i = 0u; i < 16u; i++) {
-        m |= is_edge(l, px + CIRCLE[i].x, py + CIRCLE[i].y) << i;
-    }
-    return m;
+    let y = u32(py);
+    let c0 = column_bits(l, px - 3, y, 3u);
+    let c1 = column_bits(l, px - 2, y, 3u);
+    let c2 = column_bits(l, px - 1, y, 3u);
+    let c3 = column_bits(l, px, y, 3u);
+    let c4 = column_bits(l, px + 1, y, 3u);
+    let c5 = column_bits(l, px + 2, y, 3u);
+    let c6 = column_bits(l, px + 3, y, 3u);
+    // circle point i at (dx, dy) is bit dy + 3 of c[dx + 3]
+    return cbit(c3, 0u, 0u) | cbit(c4, 0u, 1u) | cbit(c5, 1u, 2u) | cbit(c6, 2u, 3u)
+        | cbit(c6, 3u, 4u) | cbit(c6, 4u, 5u) | cbit(c5, 5u, 6u) | cbit(c4, 6u, 7u)
+        | cbit(c3, 6u, 8u) | cbit(c2, 6u, 9u) | cbit(c1, 5u, 10u) | cbit(c0, 4u, 11u)
+        | cbit(c0, 3u, 12u) | cbit(c0, 2u, 13u) | cbit(c1, 1u, 14u) | cbit(c2, 0u, 15u);
 }
 
 // Two circle indices form a straight line at the given tolerance.
@@ -52,6 +80,9 @@ fn straight(a: u32, b: u32) -> bool {
     let d = max(a, b) - min(a, b);
     return i32(min(d, 16u - d)) >= 8 - i32(P.straight_tol);
 }
+
+// Whether the two set bits of a two-bit mask form a straight line.
+fn straight_pair(m: u32) -> bool { return straight(countTrailingZeros(m), 31u - countLeadingZeros(m)); }
 
 // The L-FAST decision for edge pixel p (>= 7 pixels from every side).
 fn is_corner(l: u32, px: i32, py: i32) -> bool {
@@ -78,9 +109,10 @@ fn is_corner(l: u32, px: i32, py: i32) -> bool {
         return false;
     }
     // Branch: for_each_branch of the CPU module. No branch for 0 and all-16.
+    // The branch middles are distinct circle indices, so a 16-bit mask holds
+    // them (bit t = a branch's middle is t) instead of a list.
     if (mask == 0u || mask == 0xffffu) { return false; }
-    var mids: array<u32, 8>;
-    var nb = 0u;
+    var mids = 0u;
     // bit s of `starts` is set where a run begins: s set, s-1 (cyclically) clear
     let prev = ((mask << 1u) | (mask >> 15u)) & 0xffffu;
     var starts = mask & ~prev;
@@ -89,25 +121,45 @@ fn is_corner(l: u32, px: i32, py: i32) -> bool {
         let s = countTrailingZeros(starts);
         // run length: trailing ones of the mask rotated to start at s
         let len = min(countTrailingZeros(~(doubled >> s)), 16u);
-        mids[nb] = (s + (len - 1u) / 2u) % 16u;
-        nb++;
+        mids |= 1u << ((s + (len - 1u) / 2u) % 16u);
         starts &= starts - 1u;
     }
     // Fewer than two branches, or exactly two on a straight line, can never
     // make a corner, whatever Step 4 says: skip its reads.
-    if (nb < 2u || (nb == 2u && straight(mids[0], mids[1]))) { return false; }
-    // at most 8 branches fit on 16 positions
-    var ts: array<u32, 8>;
-    var n = 0u;
-    for (var k = 0u; k < nb; k++) {
-        if (supports(l, px, py, mids[k], P.support)) {
-            ts[n] = mids[k];
-            n++;
+    let nb = countOneBits(mids);
+    if (nb < 2u || (nb == 2u && straight_pair(mids))) { return false; }
+    var ts = 0u;
+    var m = mids;
+    while (m != 0u) {
+        let t = countTrailingZeros(m);
+        m &= m - 1u;
+        if (supports(l, px, py, t, P.support)) { ts |= 1u << t; }
+    }
+    let n = countOneBits(ts);
+    if (n < 2u) { return false; }
+    if (n == 2u) { return !straight_pair(ts); }
+    return true;
+}
+
+// Entry `windows`, the pass's first dispatch: a column pass whose invocation
+// writes its column's edge window (window_word) from the eight packed words
+// of rows y0 - 8 .. y0 + 23 (y0, a multiple of 16, is its tile's top row).
+@compute @workgroup_size(64, 1, 1)
+fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let span = column_span(wg, li);
+    if (span.y >= span.z) { return; }
+    let l = span.w;
+    let h = lh(l);
+    var bits = 0u;
+    for (var k = 0u; k < 8u; k++) {
+        // rows r - 8 .. r - 5, r = y0 + 4k: a whole packed word, or none of the level
+        let r = span.y + 4u * k;
+        if (r >= 8u && r - 8u < h) {
+            let e = pk_rows(edges[pk_word(l, span.x, r - 8u)]) == vec4<u32>(EDGE);
+            bits |= (u32(e.x) | (u32(e.y) << 1u) | (u32(e.z) << 2u) | (u32(e.w) << 3u)) << (4u * k);
         }
     }
-    if (n < 2u) { return false; }
-    if (n == 2u) { return !straight(ts[0], ts[1]); }
-    return true;
+    edge_bits[window_word(l, span.x, span.y / TILE)] = bits;
 }
 
 // Work-efficient: a column pass (tile_column) that lists its four tiles'
@@ -133,12 +185,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     // w - border) so nothing underflows.
     let b = max(P.border, 7u);
     let col = span.x >= b && span.x + b < w;
-    var word = 0u;
+    // the column's edges in its tile: bits 8 .. 23 of its window
+    var own = 0u;
+    if (span.y < span.z) { own = edge_bits[window_word(l, span.x, span.y / TILE)] >> 8u; }
     for (var y = span.y; y < span.z; y++) {
-        // the column's packed word, once per four rows
-        if ((y & 3u) == 0u) { word = edges[pk_word(l, span.x, y)]; }
         let tested = col && y >= b && y + b < h;
-        if (tested && pk_byte(word, y) == EDGE && (P.use_mask == 0u || mask[loff(l) + y * w + span.x] != 0u)) {
+        if (tested && ((own >> (y - span.y)) & 1u) != 0u && (P.use_mask == 0u || mask[loff(l) + y * w + span.x] != 0u)) {
             todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
         }
     }

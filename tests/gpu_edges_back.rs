@@ -171,6 +171,9 @@ fn check_lfast(
     ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
     // every byte 1: a word lfast skips shows as candidates
     poison(ctx, &b.cand, 0x0101_0101);
+    // every bit an edge: a window the `windows` dispatch leaves unwritten
+    // shows as edges around the pixels that read it
+    poison(ctx, &b.edge_bits, u32::MAX);
     poison(ctx, &b.mask, 0);
     for (l, e) in edges.iter().enumerate() {
         t::upload_packed(ctx, b, &b.edges, l, e);

@@ -3,7 +3,7 @@
 
 use super::kernel::DYNAMIC_STRIDE;
 use super::kernel::init_buffer;
-use super::layout::{FrameLayout, MAX_LEVELS, MAX_WINDOWS_PER_AXIS, TILE_ROW};
+use super::layout::{FrameLayout, MAX_LEVELS, MAX_WINDOWS_PER_AXIS, TILE, TILE_ROW};
 use crate::config::Config;
 use crate::error::{Error, Result};
 use crate::spec::angle::AngleBins;
@@ -93,6 +93,8 @@ pub struct Allocated {
     pub input: u64,
     /// Levels (histograms, Otsu).
     pub levels: u64,
+    /// 16x16 tiles of all levels (a word per tile column in `edge_bits`).
+    pub tiles: u64,
 }
 
 impl Allocated {
@@ -114,6 +116,7 @@ impl Allocated {
                 + levels * (4 + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 2)),
             input: (w as u64 * h as u64).next_multiple_of(4),
             levels: layout.n_levels() as u64,
+            tiles: layout.params.total_tiles as u64,
         }
     }
 
@@ -126,6 +129,7 @@ impl Allocated {
             && self.grid >= other.grid
             && self.input >= other.input
             && self.levels >= other.levels
+            && self.tiles >= other.tiles
     }
 }
 
@@ -190,6 +194,9 @@ pub struct Buffers {
     pub flags: wgpu::Buffer,
     /// E: 255 = edge, column-packed as `classes`.
     pub edges: wgpu::Buffer,
+    /// E as bits for the L-FAST test: per column of each tile, its 16 rows
+    /// and 8 more either side (shaders/lfast.wgsl, `window_word`).
+    pub edge_bits: wgpu::Buffer,
     /// L-FAST candidates (0/1), column-packed as `classes`.
     pub cand: wgpu::Buffer,
     /// Harris response of candidates (f32 bits).
@@ -344,6 +351,7 @@ impl Buffers {
             labels: px("labels"),
             flags: px("flags"),
             edges: buf("edges", allocated.packed * 4),
+            edge_bits: buf("edge_bits", allocated.tiles * TILE as u64 * 4),
             cand: buf("cand", allocated.packed * 4),
             resp: px("resp"),
             corners: buf("corners", cap * KP_WORDS * 4),
