@@ -1,18 +1,16 @@
-// SPEC 2-4 (first half) in one walk: the LSD gradient, non-maximum suppression
-// and the per-level histogram of M8. Equal to gradient.wgsl -> nms.wgsl ->
-// histogram.wgsl (which mirror src/cpu/gradient.rs, nms.rs, histogram.rs), and
+// SPEC 2-3 in one walk: the LSD gradient and non-maximum suppression. Equal to
+// gradient.wgsl -> nms.wgsl (which mirror src/cpu/gradient.rs, nms.rs), and
 // to the CPU's fused rows (src/cpu/fused.rs, `gradient_row` and the NMS inside
 // `classify_row`), without the gx, gy and S planes: those live only in registers.
-// denoised -> m (M8 = min(M, 255)), nms (1 = survivor), both column-packed,
-// hist[l * 256 + M8]; all levels in one
-// dispatch (over the tile list). `hist` is cleared by the pass before this runs.
+// denoised -> m (M8 = min(M, 255)), nms (1 = survivor), both column-packed;
+// all levels in one dispatch (over the tile list). SPEC 4's histogram of M8 is
+// counted by local_threshold.wgsl's cells, which count every pixel anyway.
 // Tests: tests/gpu_edges_front.rs (this pass == the three staged passes and the
 // CPU) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> denoised: array<u32>;
 @group(0) @binding(2) var<storage, read_write> m: array<u32>;
 @group(0) @binding(3) var<storage, read_write> nms: array<u32>;
-@group(0) @binding(4) var<storage, read_write> hist: array<atomic<u32>>;
 
 // D is column-packed (common.wgsl pk_word). D at columns x-1, x, x+1, x+2 of
 // row y clamped into the level (x-1 only feeds S at x-1, which is 0 at x = 0
@@ -55,16 +53,13 @@ fn s3(g: array<vec2<i32>, 3>, valid: vec3<bool>) -> vec3<u32> {
 
 // A column pass (tile_column): the invocation of column x walks its rows with
 // D of columns x-1..x+2 and S of columns x-1..x+1 in registers (rows y-1, y,
-// y+1): four packed words per four rows (d4) and two per four rows written; runs
-// of equal M8 are counted locally (histogram_bins.wgsl, appended to this shader).
+// y+1): four packed words per four rows (d4) and two per four rows written.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
     let l = span.w;
     let x = span.x;
     let h = lh(l);
-    let sub = m8_sub(wg, li);
-    var run = vec2<u32>(0u);
     if (span.y < span.z) {
         let cols = vec3<bool>(x > 0u, true, x + 1u < lw(l));
         let none = vec3<bool>(false);
@@ -102,12 +97,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
                 mags = 0u;
                 flags = 0u;
             }
-            count_m8(&run, sub, m8);
             up = mid;
             mid = down;
             g = gn;
             dnext = dnn;
         }
     }
-    flush_m8(wg, li, sub, run);
 }

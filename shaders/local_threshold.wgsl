@@ -3,23 +3,28 @@
 // min(M, 255) are sums of the histograms of the cells cut at every window
 // edge (spec::cell_cuts), so each pixel is counted once, not once per window
 // holding it. m (M8, column-packed, common.wgsl pk_word) + grid -> window_hist -> windows[(first window of l + j*nx + i)
-// * 4 + {0: min, 1: max, 2: lower median, 3: V3}]. Two entry points:
+// * 4 + {0: min, 1: max, 2: lower median, 3: V3}], and SPEC 4's per-level
+// histogram hist[l * 256 + M8] (the cells partition the level, so summing
+// their bins counts every pixel once: histogram.wgsl's result, without a
+// count of its own in gradient_nms). Two entry points:
 // - cells: one workgroup per cell, workgroup_id = (column, row, level),
 //   dispatch (most cells along x, along y, n_levels); it counts the cell in
-//   workgroup memory and adds each bin to every window holding the cell.
+//   workgroup memory and adds each bin to every window holding the cell and
+//   to the level's histogram.
 //   32 invocations: a cell averages ~500 pixels (KITTI, 8 levels), and with
 //   one invocation per bin (256) the per-workgroup cost dominated on lavapipe
 //   (57 -> 35 ms per frame with 32).
 // - stats: one workgroup per window, workgroup_id = (i, j, level), dispatch
 //   (max nx, max ny, n_levels): stats_of over the window's histogram.
-// Groups beyond a level's cells or windows return at once. `window_hist` is
-// cleared by the pass before it runs.
+// Groups beyond a level's cells or windows return at once. `window_hist` and
+// `hist` are cleared by the pass before it runs.
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/local_threshold.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> m: array<u32>;
 @group(0) @binding(2) var<storage, read> grid: array<u32>;
 @group(0) @binding(3) var<storage, read_write> windows: array<u32>;
 @group(0) @binding(4) var<storage, read_write> window_hist: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read_write> hist: array<atomic<u32>>;
 
 // Zero at the start of a workgroup (WGSL zero-initialises workgroup memory).
 var<workgroup> bins: array<atomic<u32>, 256>;
@@ -91,6 +96,7 @@ fn cells(
     for (var k = li; k < 256u; k += 32u) {
         let c = atomicLoad(&bins[k]);
         if (c == 0u) { continue; }
+        atomicAdd(&hist[l * 256u + k], c);
         for (var j = r.z; j < r.w; j++) {
             for (var i = r.x; i < r.y; i++) {
                 atomicAdd(&window_hist[(P.levels[l].w + j * g.x + i) * 256u + k], c);

@@ -254,20 +254,20 @@ fn histogram_matches_cpu() {
     }
 }
 
-/// The fused pass (the pipeline's) gives the staged passes' M, NMS flags and
-/// histogram: on the cases, and on low-contrast noise (D in 0..4, so equal
-/// neighbours and every sector are frequent) at sizes crossing the tiles.
+/// The fused pass (the pipeline's) gives the staged passes' M and NMS flags:
+/// on the cases, and on low-contrast noise (D in 0..4, so equal neighbours and
+/// every sector are frequent) at sizes crossing the tiles.
 #[test]
 fn gradient_nms_matches_cpu() {
     let Some(ctx) = t::context() else { return };
     let pass = GradientNmsPass::new(&ctx.device);
-    // per case: its name, buffers and per level (D, M, NMS flags, histogram) from the CPU
-    type Want = (Plane<u8>, Plane<u16>, Plane<u8>, [u32; 256]);
+    // per case: its name, buffers and per level (D, M, NMS flags) from the CPU
+    type Want = (Plane<u8>, Plane<u16>, Plane<u8>);
     let mut cases: Vec<(String, Buffers, Vec<Want>)> = CASES
         .iter()
         .map(|c| {
             let Case { name, b, cpu } = case(&ctx, c);
-            let want = cpu.into_iter().map(|em| (em.denoised, em.gradient.m, em.nms, em.histogram)).collect();
+            let want = cpu.into_iter().map(|em| (em.denoised, em.gradient.m, em.nms)).collect();
             (name, b, want)
         })
         .collect();
@@ -275,23 +275,21 @@ fn gradient_nms_matches_cpu() {
     for (w, h) in [(47u32, 33u32), (16, 2), (2, 19), (1, 1)] {
         let d = Plane::from_vec(w, h, (0..w * h).map(|_| r.below_u64(4) as u8).collect()).unwrap();
         let g = cpu::gradient::gradient(&d);
-        let (nms, hist) = (cpu::nms::nms(&g), cpu::histogram::histogram(&g.m));
+        let nms = cpu::nms::nms(&g);
         let b = Buffers::new(&ctx.device, &Config { n_levels: 1, ..Config::default() }, w, h).unwrap();
-        cases.push((format!("{w}x{h} noise"), b, vec![(d, g.m, nms, hist)]));
+        cases.push((format!("{w}x{h} noise"), b, vec![(d, g.m, nms)]));
     }
     for (name, b, want) in cases {
-        for buf in [&b.m, &b.nms, &b.hist] {
+        for buf in [&b.m, &b.nms] {
             poison(&ctx, buf);
         }
         for (l, (d, ..)) in want.iter().enumerate() {
             t::upload_packed(&ctx, &b, &b.denoised, l, d);
         }
         t::run(&ctx, &pass, &b).unwrap();
-        let hist = t::download(&ctx, &b.hist).unwrap();
-        for (l, (_, m, nms, h)) in want.iter().enumerate() {
+        for (l, (_, m, nms)) in want.iter().enumerate() {
             assert_eq!(t::download_packed(&ctx, &b, &b.m, l).unwrap(), words(&m8(m)), "M8 {name} level {l}");
             assert_eq!(t::download_packed(&ctx, &b, &b.nms, l).unwrap(), words(nms), "nms {name} level {l}");
-            assert_eq!(&hist[l * 256..][..256], &h[..], "hist {name} level {l}");
         }
     }
 }
@@ -472,6 +470,7 @@ fn local_threshold_matches_cpu() {
     for c in CASES {
         let Case { name, b, cpu, .. } = case(&ctx, c);
         poison(&ctx, &b.windows);
+        poison(&ctx, &b.hist); // `prepare` must clear it
         for (l, em) in cpu.iter().enumerate() {
             t::upload_packed(&ctx, &b, &b.m, l, &m8(&em.gradient.m));
             // one definition (lfast::spec::WindowLayout) on both paths
@@ -479,10 +478,16 @@ fn local_threshold_matches_cpu() {
         }
         t::run(&ctx, &pass, &b).unwrap();
         let got = t::download(&ctx, &b.windows).unwrap();
+        // the cells' counts are SPEC 4's histogram too: the CPU's, and the
+        // staged histogram pass's
+        let hist = t::download(&ctx, &b.hist).unwrap();
+        t::run(&ctx, &HistogramPass::new(&ctx.device), &b).unwrap();
+        assert_eq!(t::download(&ctx, &b.hist).unwrap(), hist, "{name}: hist of the cells != the histogram pass's");
         for (l, em) in cpu.iter().enumerate() {
             let o = b.layout.window_offsets[l] as usize * 4;
             let want = window_words(em);
             assert_eq!(&got[o..o + want.len()], &want[..], "{name} level {l}");
+            assert_eq!(&hist[l * 256..][..256], &em.histogram[..], "hist {name} level {l}");
         }
     }
 }
@@ -582,18 +587,18 @@ fn classify_boundaries() {
     }
 }
 
-/// Records the six passes the way the pipeline driver does: every `prepare`
-/// on the encoder, then one compute pass with the six dispatches in order.
+/// Records the front passes the way the pipeline driver does, in its order:
+/// every `prepare` on the encoder, then one compute pass with the dispatches.
 fn run_front(ctx: &GpuContext, b: &Buffers) {
     let dev = &ctx.device;
-    let (g, o, lt, c) =
-        (GradientNmsPass::new(dev), OtsuPass::new(dev), LocalThresholdPass::new(dev), ClassifyPass::new(dev));
+    let (g, lt, o, c) =
+        (GradientNmsPass::new(dev), LocalThresholdPass::new(dev), OtsuPass::new(dev), ClassifyPass::new(dev));
     let scope = dev.push_error_scope(lfast::wgpu::ErrorFilter::Validation);
-    let bound = (g.bind(dev, b).unwrap(), o.bind(dev, b).unwrap(), lt.bind(dev, b).unwrap(), c.bind(dev, b).unwrap());
+    let bound = (g.bind(dev, b).unwrap(), lt.bind(dev, b).unwrap(), o.bind(dev, b).unwrap(), c.bind(dev, b).unwrap());
     let mut enc = dev.create_command_encoder(&Default::default());
     g.prepare(&mut enc, b);
-    o.prepare(&mut enc, b);
     lt.prepare(&mut enc, b);
+    o.prepare(&mut enc, b);
     c.prepare(&mut enc, b);
     {
         let mut cp = enc.begin_compute_pass(&lfast::wgpu::ComputePassDescriptor {
@@ -601,8 +606,8 @@ fn run_front(ctx: &GpuContext, b: &Buffers) {
             timestamp_writes: None,
         });
         g.record(&mut cp, &bound.0, b);
-        o.record(&mut cp, &bound.1, b);
-        lt.record(&mut cp, &bound.2, b);
+        lt.record(&mut cp, &bound.1, b);
+        o.record(&mut cp, &bound.2, b);
         c.record(&mut cp, &bound.3, b);
     }
     ctx.queue.submit([enc.finish()]);
@@ -610,7 +615,7 @@ fn run_front(ctx: &GpuContext, b: &Buffers) {
     ctx.wait().unwrap();
 }
 
-/// The front passes (fused gradient + NMS + histogram, Otsu, local thresholds, classify) chained on the GPU from an uploaded `denoised`, on a
+/// The front passes (fused gradient + NMS, local thresholds + histogram, Otsu, classify) chained on the GPU from an uploaded `denoised`, on a
 /// 3-level pyramid of real images: classes (and the stage outputs on the way)
 /// equal the CPU's.
 #[test]
@@ -637,9 +642,11 @@ fn chained_front_matches_cpu_on_real_images() {
         run_front(&ctx, &b);
         let otsu = t::download(&ctx, &b.otsu).unwrap();
         let windows = t::download(&ctx, &b.windows).unwrap();
+        let hist = t::download(&ctx, &b.hist).unwrap();
         let mut strong = 0;
         for (l, em) in cpu.iter().enumerate() {
             assert_eq!(t::download_packed(&ctx, &b, &b.nms, l).unwrap(), words(&em.nms), "{name} level {l}: nms");
+            assert_eq!(&hist[l * 256..][..256], &em.histogram[..], "{name} level {l}: hist");
             assert_eq!(otsu[l], t1_word(em), "{name} level {l}: T1");
             let o = b.layout.window_offsets[l] as usize * 4;
             let want = window_words(em);

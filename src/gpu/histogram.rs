@@ -1,13 +1,14 @@
 //! SPEC 4 (first half) on the GPU: shaders/histogram.wgsl, mirroring
-//! src/cpu/histogram.rs. `m` -> `hist` (256 bins per level), all levels in one dispatch.
+//! src/cpu/histogram.rs. `m` -> `hist` (256 bins per level), all levels in one
+//! dispatch. The pipeline's histogram comes from
+//! [`local_threshold`](super::local_threshold)'s cells; this pass is the
+//! per-stage reference the tests compare it with.
 
 use super::kernel::{Binding, PARAMS, Slot, b};
 use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
-/// (with shaders/histogram_bins.wgsl, the M8 counting it shares).
-pub const SOURCE: &str =
-    concat!(include_str!("../../shaders/histogram.wgsl"), include_str!("../../shaders/histogram_bins.wgsl"));
+pub const SOURCE: &str = include_str!("../../shaders/histogram.wgsl");
 /// Its bindings.
 pub const BINDINGS: &[Binding] = &[PARAMS, b(1, "m", Slot::Read), b(2, "hist", Slot::ReadWrite)];
 

@@ -1,6 +1,8 @@
 //! SPEC 5 on the GPU: shaders/local_threshold.wgsl, mirroring
 //! src/cpu/local_threshold.rs. `m` + `grid` -> `window_hist` (per-cell counts
-//! added to the windows holding each cell) -> `windows` (min, max, median, V3).
+//! added to the windows holding each cell) -> `windows` (min, max, median, V3);
+//! the cells' counts also make SPEC 4's per-level histogram `hist` (equal to
+//! [`histogram`](super::histogram)'s), which is why this pass runs before Otsu.
 
 use super::buffers::Buffers;
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
@@ -16,6 +18,7 @@ pub const BINDINGS: &[Binding] = &[
     b(2, "grid", Slot::Read),
     b(3, "windows", Slot::ReadWrite),
     b(4, "window_hist", Slot::ReadWrite),
+    b(5, "hist", Slot::ReadWrite),
 ];
 
 /// The window statistics pass: `cells`, then `stats`.
@@ -47,6 +50,7 @@ impl Pass for LocalThresholdPass {
                 ("grid", &b.grid),
                 ("windows", &b.windows),
                 ("window_hist", &b.window_hist),
+                ("hist", &b.hist),
             ],
         )
     }
@@ -63,5 +67,7 @@ impl Pass for LocalThresholdPass {
         // frame's windows only; the buffer holds the most any frame could have).
         let bytes = 1024 * b.layout.total_windows as u64;
         encoder.clear_buffer(&b.window_hist, 0, Some(bytes.min(b.window_hist.size())));
+        // ... and into the levels' histograms
+        encoder.clear_buffer(&b.hist, 0, None);
     }
 }
