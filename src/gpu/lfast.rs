@@ -43,13 +43,7 @@ impl Pass for LfastPass {
         // Both kernels have the same layout entries, so one bind group serves both.
         self.test.bind(
             device,
-            &[
-                ("P", &b.params),
-                ("edges", &b.edges),
-                ("mask", &b.mask),
-                ("cand", &b.cand),
-                ("edge_bits", &b.edge_bits),
-            ],
+            &[("P", &b.params), ("edges", &b.edges), ("mask", &b.mask), ("cand", &b.cand), ("edge_bits", &b.edge_bits)],
         )
     }
 
