@@ -41,7 +41,8 @@ fn class_of(mv: u32, t1: u32, v3: u32, alpha_pct: u32) -> u32 {
     return NONE;
 }
 
-// A column pass (tile_column): the window column of x is looked up once.
+// A column pass (tile_column): the window column of x is looked up once, and
+// the window rows of the walk at its ends.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
@@ -52,6 +53,22 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     // WindowGrid::v3_at: the grid holds xs (nx), ys (ny), col_window (w), row_window (h).
     let g = P.grids[l];
     let i = grid[g.z + g.x + g.y + span.x];
+    // row_window (monotone) of the walk's first and last rows, and their V3:
+    // every row between has one of these windows when they are equal or
+    // adjacent, so a pixel reads the grid only in a walk that crosses a
+    // window boundary, and a window's V3 only past two windows (small levels).
+    let rows = g.z + g.x + g.y + lw(l);
+    let win0 = P.levels[l].w + i;
+    var jt = 0u;
+    var jb = 0u;
+    var vt = 0u;
+    var vb = 0u;
+    if (t1 != 0u) {
+        jt = grid[rows + span.y];
+        jb = grid[rows + span.z - 1u];
+        vt = windows[(win0 + jt * g.x) * 4u + 3u];
+        vb = windows[(win0 + jb * g.x) * 4u + 3u];
+    }
     // `classes` is column-packed: four rows to a word, written when complete
     // `nms` is column-packed too: its word is read once per four rows
     // `m` is column-packed like `nms`
@@ -65,8 +82,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         }
         var c = NONE;
         if (t1 != 0u && pk_byte(flags, y) != 0u) {
-            let j = grid[g.z + g.x + g.y + lw(l) + y];
-            let v3 = windows[(P.levels[l].w + j * g.x + i) * 4u + 3u];
+            var v3 = vt;
+            if (jb != jt) {
+                let j = grid[rows + y];
+                v3 = select(vt, vb, j == jb);
+                if (j != jt && j != jb) { v3 = windows[(win0 + j * g.x) * 4u + 3u]; }
+            }
             c = class_of(pk_byte(mags, y), t1, v3, P.alpha_pct);
         }
         word |= pk_place(c, y);
