@@ -127,6 +127,9 @@ fn pk_byte3(words: vec3<u32>, y: u32) -> vec3<u32> { return (words >> vec3<u32>(
 fn pk_byte4(words: vec4<u32>, y: u32) -> vec4<u32> { return (words >> vec4<u32>((y & 3u) * 8u)) & vec4<u32>(0xffu); }
 // All four rows of a word: row 4k + r in component r.
 fn pk_rows(word: u32) -> vec4<u32> { return (vec4<u32>(word) >> vec4<u32>(0u, 8u, 16u, 24u)) & vec4<u32>(0xffu); }
+// The word of four rows whose bytes are bits 0..3 of q (0 or 1 each; times
+// 255 gives 0 / 255 bytes).
+fn pk_from_bits(q: u32) -> u32 { return (q & 1u) | ((q & 2u) << 7u) | ((q & 4u) << 14u) | ((q & 8u) << 21u); }
 // Whether row y completes the word being built by a walk that ends before row
 // `end`: the last of its four rows, or the walk's last row.
 fn pk_complete(y: u32, end: u32) -> bool { return (y & 3u) == 3u || y + 1u == end; }

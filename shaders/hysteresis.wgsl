@@ -60,12 +60,6 @@ const WEAK: u32 = 2u;
 const STRONG: u32 = 4u;
 const EDGE: u32 = 255u;
 
-// A pixel the CPU flood can reach or start from: a seed (STRONG) or WEAK.
-// `ruled` is column-packed (common.wgsl pk_word).
-fn is_active(c: u32) -> bool {
-    return c == WEAK || c == STRONG;
-}
-
 // The parent of a root that has not been compressed (labels as cleared).
 const NONE: u32 = 0xffffffffu;
 
@@ -144,7 +138,11 @@ fn active3(c: vec3<u32>) -> vec3<bool> {
 // Every union made joins two 8-neighbours and every 8-neighbour pair ends up
 // joined, so the trees are the 8-connected components, as with all four unions.
 // Each invocation walks its column with the words of columns x-1, x, x+1 in
-// registers: three reads per four rows.
+// registers (three reads per four rows) and notes each row's unions as bits;
+// then it makes them in a loop over the rows that have any. A SIMD software
+// rasteriser runs a branch's body for every lane of the group (masked), so the
+// unions in the walk cost 16 times per column; compacted, they cost as many
+// times as the busiest lane of the group has pixels to join.
 @compute @workgroup_size(64, 1, 1)
 fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
@@ -155,27 +153,38 @@ fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     var up = vec3<bool>(false);
     if (c.y > 0u) { up = active3(pk_byte3(words3(l, c.x, c.y - 1u), c.y - 1u)); }
     var words = vec3<u32>(0u);
+    // per row r of the walk: bit r of `rows` if it has a union to make;
+    // bits 2r, 2r+1 of `first`: its first union (0 none, 1 U, 2 L, 3 UL);
+    // bit r of `ur`: a second union, with UR
+    var rows = 0u;
+    var first = 0u;
+    var ur = 0u;
     for (var y = c.y; y < c.z; y++) {
         if ((y & 3u) == 0u) { words = words3(l, c.x, y); }
         let cur = active3(pk_byte3(words, y));
-        if (cur.y) {
-            let i = loff(l) + y * w + c.x;
-            // first and second neighbour to join (NONE: none)
-            var t = vec2<u32>(NONE);
-            if (up.y) {
-                t.x = i - w;
-            } else {
-                if (cur.x) {
-                    t.x = i - 1u;
-                } else if (up.x) {
-                    t.x = i - w - 1u;
-                }
-                if (up.z) { t.y = i - w + 1u; }
-            }
-            if (t.x != NONE) { link(i, t.x); }
-            if (t.y != NONE) { link(i, t.y); }
+        let r = y - c.y;
+        var code = 0u;
+        var second = false;
+        if (up.y) {
+            code = 1u;
+        } else {
+            code = select(select(0u, 3u, up.x), 2u, cur.x);
+            second = up.z;
+        }
+        if (cur.y && (code != 0u || second)) {
+            rows |= 1u << r;
+            first |= code << (2u * r);
+            ur |= u32(second) << r;
         }
         up = cur;
+    }
+    while (rows != 0u) {
+        let r = countTrailingZeros(rows);
+        rows &= rows - 1u;
+        let i = loff(l) + (c.y + r) * w + c.x;
+        let code = (first >> (2u * r)) & 3u;
+        if (code != 0u) { link(i, select(select(i - w - 1u, i - 1u, code == 2u), i - w, code == 1u)); }
+        if (((ur >> r) & 1u) != 0u) { link(i, i - w + 1u); }
     }
 }
 
@@ -189,33 +198,52 @@ fn compress_px(i: u32, strong: bool) {
     if (strong) { atomicOr(&flags[root], 1u); }
 }
 
+// Bits of the walk's rows (bit r = row y0 + r, rows past `end` clear): which
+// are active (.x) and which STRONG (.y), from the column's words of `ruled`.
+fn active_rows(l: u32, x: u32, y0: u32, end: u32) -> vec2<u32> {
+    var m = vec2<u32>(0u);
+    for (var y = y0; y < end; y += 4u) {
+        let k = pk_rows(ruled[pk_word(l, x, y)]);
+        let weak = k == vec4<u32>(WEAK);
+        let strong = k == vec4<u32>(STRONG);
+        let a = u32(weak.x || strong.x) | (u32(weak.y || strong.y) << 1u) | (u32(weak.z || strong.z) << 2u)
+            | (u32(weak.w || strong.w) << 3u);
+        let s = u32(strong.x) | (u32(strong.y) << 1u) | (u32(strong.z) << 2u) | (u32(strong.w) << 3u);
+        m |= vec2<u32>(a, s) << vec2<u32>(y - y0);
+    }
+    // rows past the level's last are 0 in their word (NONE), never active
+    return m;
+}
+
+// Compacted as merge: a loop over the column's active pixels only.
 @compute @workgroup_size(64, 1, 1)
 fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
-    var word = 0u;
-    for (var y = c.y; y < c.z; y++) {
-        if ((y & 3u) == 0u) { word = ruled[pk_word(c.w, c.x, y)]; }
-        let k = pk_byte(word, y);
-        if (is_active(k)) { compress_px(loff(c.w) + y * lw(c.w) + c.x, k == STRONG); }
+    if (c.y == c.z) { return; }
+    let m = active_rows(c.w, c.x, c.y, c.z);
+    var rows = m.x;
+    while (rows != 0u) {
+        let r = countTrailingZeros(rows);
+        rows &= rows - 1u;
+        compress_px(loff(c.w) + (c.y + r) * lw(c.w) + c.x, ((m.y >> r) & 1u) != 0u);
     }
 }
 
+// Compacted as merge: the flag of each active pixel's root (after compress
+// its parent), then the column's packed words of `edges`.
 @compute @workgroup_size(64, 1, 1)
 fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
-    var word = 0u;
-    var out = 0u;
-    for (var y = c.y; y < c.z; y++) {
-        if ((y & 3u) == 0u) { word = ruled[pk_word(c.w, c.x, y)]; }
-        let i = loff(c.w) + y * lw(c.w) + c.x;
-        var e = 0u;
-        // after compress every active pixel's parent is its root
-        if (is_active(pk_byte(word, y)) && atomicLoad(&flags[parent(i)]) == 1u) { e = EDGE; }
-        // `edges` is column-packed as `ruled`
-        out |= pk_place(e, y);
-        if (pk_complete(y, c.z)) {
-            edges[pk_word(c.w, c.x, y)] = out;
-            out = 0u;
-        }
+    if (c.y == c.z) { return; }
+    var rows = active_rows(c.w, c.x, c.y, c.z).x;
+    var e = 0u;
+    while (rows != 0u) {
+        let r = countTrailingZeros(rows);
+        rows &= rows - 1u;
+        if (atomicLoad(&flags[parent(loff(c.w) + (c.y + r) * lw(c.w) + c.x)]) == 1u) { e |= 1u << r; }
+    }
+    // `edges` is column-packed as `ruled`: bit r of e -> 255 at row c.y + r
+    for (var y = c.y; y < c.z; y += 4u) {
+        edges[pk_word(c.w, c.x, y)] = pk_from_bits(e >> (y - c.y)) * EDGE;
     }
 }

@@ -205,7 +205,6 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     // Row r's bit becomes byte r % 4 of word r / 4 (a 0/1 byte).
     let bits = atomicLoad(&found[li.x]);
     for (var y = span.y; y < span.z; y += 4u) {
-        let q = bits >> (y - span.y);
-        cand[pk_word(l, span.x, y)] = (q & 1u) | ((q & 2u) << 7u) | ((q & 4u) << 14u) | ((q & 8u) << 21u);
+        cand[pk_word(l, span.x, y)] = pk_from_bits(bits >> (y - span.y));
     }
 }
