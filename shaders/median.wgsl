@@ -54,44 +54,50 @@ fn median9(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>) -> u32 {
     return p4;
 }
 
-// The pixels (x-1, x, x+1) of row y of level l, y clamped into the level and
-// x-1, x+1 given clamped (xl, xr). `cw` caches the three columns' words of
-// group `cg`: the walk asks for rows in order, so each word is read once.
-fn row3(l: u32, xl: u32, x: u32, xr: u32, y: u32, cg: ptr<function, u32>, cw: ptr<function, vec3<u32>>) -> vec3<u32> {
+// The words of columns xl, x, xr (x-1, x, x+1 clamped) holding row y of
+// level l, y clamped into the level.
+fn words3_at(l: u32, xl: u32, x: u32, xr: u32, y: u32) -> vec3<u32> {
     let yc = min(y, lh(l) - 1u);
-    if ((yc >> 2u) != *cg) {
-        *cw = vec3<u32>(src[pk_word(l, xl, yc)], src[pk_word(l, x, yc)], src[pk_word(l, xr, yc)]);
-        *cg = yc >> 2u;
-    }
-    return pk_byte3(*cw, yc);
+    return vec3<u32>(src[pk_word(l, xl, yc)], src[pk_word(l, x, yc)], src[pk_word(l, xr, yc)]);
 }
 
 // A column pass (tile_column): each invocation walks one column of a tile
-// with the 3x3 window in registers (three words per four rows).
+// with the 3x3 window in registers: an outer loop over the words (four rows)
+// reads the next group's three words unconditionally, an inner one takes the
+// four rows. (A load cached under `if`, the earlier form, ran every row on a
+// SIMD software rasteriser, which executes an if-body masked for every lane.)
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
     if (span.y == span.z) { return; }
     let l = span.w;
     let w = lw(l);
+    let h = lh(l);
     let x = span.x;
     let xl = select(x - 1u, 0u, x == 0u);
     let xr = min(x + 1u, w - 1u);
-    var cg = 0xffffffffu;
-    var cw = vec3<u32>(0u);
-    var a = row3(l, xl, x, xr, select(span.y - 1u, 0u, span.y == 0u), &cg, &cw);
-    var b = row3(l, xl, x, xr, span.y, &cg, &cw);
-    var word = 0u;
-    for (var y = span.y; y < span.z; y++) {
-        let c = row3(l, xl, x, xr, y + 1u, &cg, &cw);
-        var v = b.y;
-        if (is_noise(v, vec4<u32>(a.y, c.y, b.x, b.z))) { v = median9(a, b, c); }
-        word |= pk_place(v, y);
-        if (pk_complete(y, span.z)) {
-            dst[pk_word(l, x, y)] = word;
-            word = 0u;
+    // row y0 - 1 (clamped: row 0 above the first), then the group of y0
+    let ya = select(span.y - 1u, 0u, span.y == 0u);
+    var a = pk_byte3(words3_at(l, xl, x, xr, ya), ya);
+    var cur = words3_at(l, xl, x, xr, span.y);
+    var b = pk_byte3(cur, span.y);
+    for (var y = span.y; y < span.z; y += 4u) {
+        // the next group's words (its first row, clamped, is row y + 4's)
+        let nxt = words3_at(l, xl, x, xr, y + 4u);
+        var word = 0u;
+        for (var r = 0u; r < 4u; r++) {
+            let yy = y + r;
+            // row yy + 1 clamped: in this group's words for r < 3, else the next's
+            let yc = min(yy + 1u, h - 1u);
+            let c = pk_byte3(select(nxt, cur, (yc >> 2u) == (y >> 2u)), yc);
+            var v = b.y;
+            if (is_noise(v, vec4<u32>(a.y, c.y, b.x, b.z))) { v = median9(a, b, c); }
+            // rows past the walk's end stay 0 (rows past the level's last are 0)
+            word |= select(0u, pk_place(v, yy), yy < span.z);
+            a = b;
+            b = c;
         }
-        a = b;
-        b = c;
+        dst[pk_word(l, x, y)] = word;
+        cur = nxt;
     }
 }
