@@ -69,31 +69,27 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         vt = windows[(win0 + jt * g.x) * 4u + 3u];
         vb = windows[(win0 + jb * g.x) * 4u + 3u];
     }
-    // `classes` is column-packed: four rows to a word, written when complete
-    // `nms` is column-packed too: its word is read once per four rows
-    // `m` is column-packed like `nms`
-    var word = 0u;
-    var flags = 0u;
-    var mags = 0u;
-    for (var y = span.y; y < span.z; y++) {
-        if ((y & 3u) == 0u) {
-            flags = nms[pk_word(l, span.x, y)];
-            mags = m[pk_word(l, span.x, y)];
-        }
-        var c = NONE;
-        if (t1 != 0u && pk_byte(flags, y) != 0u) {
-            var v3 = vt;
-            if (jb != jt) {
-                let j = grid[rows + y];
-                v3 = select(vt, vb, j == jb);
-                if (j != jt && j != jb) { v3 = windows[(win0 + j * g.x) * 4u + 3u]; }
+    // `classes`, `nms` and `m` are column-packed: an outer loop over the
+    // words (four rows) reads a word of each and writes one, unconditionally
+    // (see median.wgsl), an inner loop takes the rows
+    for (var y = span.y; y < span.z; y += 4u) {
+        let flags = nms[pk_word(l, span.x, y)];
+        let mags = m[pk_word(l, span.x, y)];
+        var word = 0u;
+        for (var yy = y; yy < y + 4u; yy++) {
+            // rows past the level's last are 0 in `nms`: NONE
+            var c = NONE;
+            if (t1 != 0u && pk_byte(flags, yy) != 0u) {
+                var v3 = vt;
+                if (jb != jt) {
+                    let j = grid[rows + min(yy, span.z - 1u)];
+                    v3 = select(vt, vb, j == jb);
+                    if (j != jt && j != jb) { v3 = windows[(win0 + j * g.x) * 4u + 3u]; }
+                }
+                c = class_of(pk_byte(mags, yy), t1, v3, P.alpha_pct);
             }
-            c = class_of(pk_byte(mags, y), t1, v3, P.alpha_pct);
+            word |= pk_place(c, yy);
         }
-        word |= pk_place(c, y);
-        if (pk_complete(y, span.z)) {
-            classes[pk_word(l, span.x, y)] = word;
-            word = 0u;
-        }
+        classes[pk_word(l, span.x, y)] = word;
     }
 }

@@ -12,25 +12,24 @@
 @group(0) @binding(2) var<storage, read_write> m: array<u32>;
 @group(0) @binding(3) var<storage, read_write> nms: array<u32>;
 
-// D is column-packed (common.wgsl pk_word). D at columns x-1, x, x+1, x+2 of
-// row y clamped into the level (x-1 only feeds S at x-1, which is 0 at x = 0
-// whatever it reads, x+1 and x+2 clamp to the last column), from the four
-// columns' words of the row's group of four, which `cw` caches for group `cg`:
-// the walk asks for rows in order, so each word is read once.
-fn d4(l: u32, x: u32, y: u32, cg: ptr<function, u32>, cw: ptr<function, vec4<u32>>) -> vec4<i32> {
-    let yc = min(y, lh(l) - 1u);
-    if ((yc >> 2u) != *cg) {
-        let row = pk_word(l, 0u, yc);
-        let last = lw(l) - 1u;
-        *cw = vec4<u32>(
-            denoised[row + max(x, 1u) - 1u],
-            denoised[row + x],
-            denoised[row + min(x + 1u, last)],
-            denoised[row + min(x + 2u, last)],
-        );
-        *cg = yc >> 2u;
-    }
-    return vec4<i32>(pk_byte4(*cw, yc));
+// D is column-packed (common.wgsl pk_word). The words of columns x-1, x,
+// x+1, x+2 holding row y, y clamped into the level (x-1 only feeds S at x-1,
+// which is 0 at x = 0 whatever it reads; x+1 and x+2 clamp to the last column).
+fn d4_words(l: u32, x: u32, y: u32) -> vec4<u32> {
+    let row = pk_word(l, 0u, min(y, lh(l) - 1u));
+    let last = lw(l) - 1u;
+    return vec4<u32>(
+        denoised[row + max(x, 1u) - 1u],
+        denoised[row + x],
+        denoised[row + min(x + 1u, last)],
+        denoised[row + min(x + 2u, last)],
+    );
+}
+
+// D of row y (clamped into the level) at the four columns, from `words`
+// holding it.
+fn d4_at(l: u32, words: vec4<u32>, y: u32) -> vec4<i32> {
+    return vec4<i32>(pk_byte4(words, min(y, lh(l) - 1u)));
 }
 
 // (gx2, gy2) at columns x-1, x, x+1 from D rows y (a) and y + 1 (c): SPEC 2's
@@ -53,54 +52,59 @@ fn s3(g: array<vec2<i32>, 3>, valid: vec3<bool>) -> vec3<u32> {
 
 // A column pass (tile_column): the invocation of column x walks its rows with
 // D of columns x-1..x+2 and S of columns x-1..x+1 in registers (rows y-1, y,
-// y+1): four packed words per four rows (d4) and two per four rows written.
+// y+1). An outer loop over the column's words (four rows) reads the next
+// group's four words of D and writes one word of `m` and of `nms`, all
+// unconditionally; an inner loop takes the rows. (Loads cached under `if` and
+// stores under `if`, the earlier form, ran every row on a SIMD software
+// rasteriser, which executes an if-body masked for every lane.)
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
+    if (span.y == span.z) { return; }
     let l = span.w;
     let x = span.x;
     let h = lh(l);
-    if (span.y < span.z) {
-        let cols = vec3<bool>(x > 0u, true, x + 1u < lw(l));
-        let none = vec3<bool>(false);
-        // S of row y0 - 1 (none above row 0), gradients and S of row y0
-        var cg = 0xffffffffu;
-        var cw = vec4<u32>(0u);
-        var up = vec3<u32>(0u);
-        if (span.y > 0u) {
-            // row y0 - 1 is the last of the group before (read once, then the walk's)
-            let dup = d4(l, x, span.y - 1u, &cg, &cw);
-            up = s3(grad3(dup, d4(l, x, span.y, &cg, &cw)), cols);
-        }
-        var dcur = d4(l, x, span.y, &cg, &cw);
-        var dnext = d4(l, x, span.y + 1u, &cg, &cw);
-        var g = grad3(dcur, dnext);
-        var mid = s3(g, cols);
-        var flags = 0u;
+    let cols = vec3<bool>(x > 0u, true, x + 1u < lw(l));
+    let none = vec3<bool>(false);
+    // S of row y0 - 1 (none above row 0), gradients and S of row y0
+    var cur = d4_words(l, x, span.y);
+    var up = vec3<u32>(0u);
+    if (span.y > 0u) {
+        // row y0 - 1 is the last of the group before
+        up = s3(grad3(d4_at(l, d4_words(l, x, span.y - 1u), span.y - 1u), d4_at(l, cur, span.y)), cols);
+    }
+    var dnext = d4_at(l, cur, span.y + 1u);
+    var g = grad3(d4_at(l, cur, span.y), dnext);
+    var mid = s3(g, cols);
+    for (var y = span.y; y < span.z; y += 4u) {
+        // rows y + 4 .. y + 7 (clamped): rows y + 2 .. y + 5 feed this group
+        let nxt = d4_words(l, x, y + 4u);
         var mags = 0u;
-        for (var y = span.y; y < span.z; y++) {
-            // row y + 1: its S (0 below the last row) and, next time, its gradients
-            let dnn = d4(l, x, y + 2u, &cg, &cw);
+        var flags = 0u;
+        for (var r = 0u; r < 4u; r++) {
+            let yy = y + r;
+            // row yy + 1: its S (0 below the last row) and, next time, its gradients
+            let y2 = min(yy + 2u, h - 1u);
+            let dnn = d4_at(l, select(nxt, cur, (y2 >> 2u) == (y >> 2u)), y2);
             let gn = grad3(dnext, dnn);
-            let down = s3(gn, select(none, cols, y + 1u < h));
+            let down = s3(gn, select(none, cols, yy + 1u < h));
             let v = mid.y;
             // v > first >= 0 keeps only S > 0 (SPEC 3 suppresses S = 0)
             let ab = sector_pair(g[1].x, g[1].y, up, mid, down);
             let keep = select(0u, 1u, v > ab.x && v >= ab.y);
             let m8 = min(magnitude(v), 255u);
-            // `m` and `nms` are column-packed: a word each per four rows
-            mags |= pk_place(m8, y);
-            flags |= pk_place(keep, y);
-            if (pk_complete(y, span.z)) {
-                m[pk_word(l, x, y)] = mags;
-                nms[pk_word(l, x, y)] = flags;
-                mags = 0u;
-                flags = 0u;
-            }
+            // rows past the walk's end stay 0 (rows past the level's last are 0)
+            let inside = yy < span.z;
+            mags |= select(0u, pk_place(m8, yy), inside);
+            flags |= select(0u, pk_place(keep, yy), inside);
             up = mid;
             mid = down;
             g = gn;
             dnext = dnn;
         }
+        // `m` and `nms` are column-packed: a word each per four rows
+        m[pk_word(l, x, y)] = mags;
+        nms[pk_word(l, x, y)] = flags;
+        cur = nxt;
     }
 }

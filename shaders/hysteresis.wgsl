@@ -138,7 +138,8 @@ fn active3(c: vec3<u32>) -> vec3<bool> {
 // Every union made joins two 8-neighbours and every 8-neighbour pair ends up
 // joined, so the trees are the 8-connected components, as with all four unions.
 // Each invocation walks its column with the words of columns x-1, x, x+1 in
-// registers (three reads per four rows) and notes each row's unions as bits;
+// registers (three reads per four rows, in an outer loop over the words, not
+// under `if`: see median.wgsl) and notes each row's unions as bits;
 // then it makes them in a loop over the rows that have any. A SIMD software
 // rasteriser runs a branch's body for every lane of the group (masked), so the
 // unions in the walk cost 16 times per column; compacted, they cost as many
@@ -152,31 +153,34 @@ fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     // classes of the row above at x-1, x, x+1 (none above row 0)
     var up = vec3<bool>(false);
     if (c.y > 0u) { up = active3(pk_byte3(words3(l, c.x, c.y - 1u), c.y - 1u)); }
-    var words = vec3<u32>(0u);
     // per row r of the walk: bit r of `rows` if it has a union to make;
     // bits 2r, 2r+1 of `first`: its first union (0 none, 1 U, 2 L, 3 UL);
     // bit r of `ur`: a second union, with UR
     var rows = 0u;
     var first = 0u;
     var ur = 0u;
-    for (var y = c.y; y < c.z; y++) {
-        if ((y & 3u) == 0u) { words = words3(l, c.x, y); }
-        let cur = active3(pk_byte3(words, y));
-        let r = y - c.y;
-        var code = 0u;
-        var second = false;
-        if (up.y) {
-            code = 1u;
-        } else {
-            code = select(select(0u, 3u, up.x), 2u, cur.x);
-            second = up.z;
+    // an outer loop over the words (four rows), an inner one over the rows
+    // (rows past the level's last are NONE in their word: never active)
+    for (var y = c.y; y < c.z; y += 4u) {
+        let words = words3(l, c.x, y);
+        for (var k = 0u; k < 4u; k++) {
+            let cur = active3(pk_byte3(words, y + k));
+            let r = y + k - c.y;
+            var code = 0u;
+            var second = false;
+            if (up.y) {
+                code = 1u;
+            } else {
+                code = select(select(0u, 3u, up.x), 2u, cur.x);
+                second = up.z;
+            }
+            if (cur.y && (code != 0u || second)) {
+                rows |= 1u << r;
+                first |= code << (2u * r);
+                ur |= u32(second) << r;
+            }
+            up = cur;
         }
-        if (cur.y && (code != 0u || second)) {
-            rows |= 1u << r;
-            first |= code << (2u * r);
-            ur |= u32(second) << r;
-        }
-        up = cur;
     }
     while (rows != 0u) {
         let r = countTrailingZeros(rows);

@@ -46,8 +46,10 @@ fn rule_at(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>) -> u32 {
     return b.y;
 }
 
-// A column pass (tile_column): the 3x3 window walks down in registers, and
-// the three columns' packed words are read once per four rows.
+// A column pass (tile_column): the 3x3 window walks down in registers. An
+// outer loop over the column's words (four rows) reads the next group's three
+// words and writes one word of `ruled`, unconditionally; an inner loop takes
+// the rows (see median.wgsl for why not under `if`).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
@@ -56,18 +58,21 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let x = span.x;
     let y0 = i32(span.y);  // a multiple of 4: the first row of its words
     var a = pk_byte3(words3(l, x, y0 - 1), u32(y0 - 1));
-    var wd = words3(l, x, y0);
-    var b = pk_byte3(wd, u32(y0));
-    var word = 0u;
-    for (var y = y0; y < i32(span.z); y++) {
-        if (((y + 1) & 3) == 0) { wd = words3(l, x, y + 1); }
-        let c = pk_byte3(wd, u32(y + 1));
-        word |= pk_place(rule_at(a, b, c), u32(y));
-        if (pk_complete(u32(y), span.z)) {
-            ruled[pk_word(l, x, u32(y))] = word;
-            word = 0u;
+    var cur = words3(l, x, y0);
+    var b = pk_byte3(cur, u32(y0));
+    for (var y = y0; y < i32(span.z); y += 4) {
+        // rows y + 4 .. y + 7: row y + 4 is the last group row's `c`
+        let nxt = words3(l, x, y + 4);
+        var word = 0u;
+        for (var r = 0; r < 4; r++) {
+            let yy = y + r;
+            let c = pk_byte3(select(nxt, cur, r < 3), u32(yy + 1));
+            // rows past the walk's end stay 0 (NONE)
+            word |= select(0u, pk_place(rule_at(a, b, c), u32(yy)), yy < i32(span.z));
+            a = b;
+            b = c;
         }
-        a = b;
-        b = c;
+        ruled[pk_word(l, x, u32(y))] = word;
+        cur = nxt;
     }
 }
