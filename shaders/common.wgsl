@@ -127,6 +127,8 @@ fn pk_byte3(words: vec3<u32>, y: u32) -> vec3<u32> { return (words >> vec3<u32>(
 fn pk_byte4(words: vec4<u32>, y: u32) -> vec4<u32> { return (words >> vec4<u32>((y & 3u) * 8u)) & vec4<u32>(0xffu); }
 // All four rows of a word: row 4k + r in component r.
 fn pk_rows(word: u32) -> vec4<u32> { return (vec4<u32>(word) >> vec4<u32>(0u, 8u, 16u, 24u)) & vec4<u32>(0xffu); }
+// Bit r = component r: four rows' tests (e.g. on pk_rows) as row bits.
+fn bits4(b: vec4<bool>) -> u32 { return u32(b.x) | (u32(b.y) << 1u) | (u32(b.z) << 2u) | (u32(b.w) << 3u); }
 // The word of four rows whose bytes are bits 0..3 of q (0 or 1 each; times
 // 255 gives 0 / 255 bytes).
 fn pk_from_bits(q: u32) -> u32 { return (q & 1u) | ((q & 2u) << 7u) | ((q & 4u) << 14u) | ((q & 8u) << 21u); }

@@ -72,13 +72,17 @@ var<workgroup> todo_n: atomic<u32>;
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
     let l = span.w;
-    var word = 0u;
-    for (var y = span.y; y < span.z; y++) {
-        // `cand` is column-packed: its word once per four rows
-        if ((y & 3u) == 0u) { word = cand[pk_word(l, span.x, y)]; }
-        if (pk_byte(word, y) != 0u) {
-            todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
-        }
+    // the column's candidates as row bits (`cand` is column-packed: a word per
+    // four rows), then a loop over those only (an if-body in the walk would
+    // run every row, masked, on a SIMD software rasteriser)
+    var rows = 0u;
+    for (var y = span.y; y < span.z; y += 4u) {
+        rows |= bits4(pk_rows(cand[pk_word(l, span.x, y)]) != vec4<u32>(0u)) << (y - span.y);
+    }
+    while (rows != 0u) {
+        let r = countTrailingZeros(rows);
+        rows &= rows - 1u;
+        todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, r);
     }
     workgroupBarrier();
     let n = atomicLoad(&todo_n);

@@ -208,12 +208,8 @@ fn active_rows(l: u32, x: u32, y0: u32, end: u32) -> vec2<u32> {
     var m = vec2<u32>(0u);
     for (var y = y0; y < end; y += 4u) {
         let k = pk_rows(ruled[pk_word(l, x, y)]);
-        let weak = k == vec4<u32>(WEAK);
-        let strong = k == vec4<u32>(STRONG);
-        let a = u32(weak.x || strong.x) | (u32(weak.y || strong.y) << 1u) | (u32(weak.z || strong.z) << 2u)
-            | (u32(weak.w || strong.w) << 3u);
-        let s = u32(strong.x) | (u32(strong.y) << 1u) | (u32(strong.z) << 2u) | (u32(strong.w) << 3u);
-        m |= vec2<u32>(a, s) << vec2<u32>(y - y0);
+        let strong = bits4(k == vec4<u32>(STRONG));
+        m |= vec2<u32>(bits4(k == vec4<u32>(WEAK)) | strong, strong) << vec2<u32>(y - y0);
     }
     // rows past the level's last are 0 in their word (NONE), never active
     return m;

@@ -155,8 +155,7 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
         // rows r - 8 .. r - 5, r = y0 + 4k: a whole packed word, or none of the level
         let r = span.y + 4u * k;
         if (r >= 8u && r - 8u < h) {
-            let e = pk_rows(edges[pk_word(l, span.x, r - 8u)]) == vec4<u32>(EDGE);
-            bits |= (u32(e.x) | (u32(e.y) << 1u) | (u32(e.z) << 2u) | (u32(e.w) << 3u)) << (4u * k);
+            bits |= bits4(pk_rows(edges[pk_word(l, span.x, r - 8u)]) == vec4<u32>(EDGE)) << (4u * k);
         }
     }
     edge_bits[window_word(l, span.x, span.y / TILE)] = bits;
@@ -185,13 +184,22 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     // w - border) so nothing underflows.
     let b = max(P.border, 7u);
     let col = span.x >= b && span.x + b < w;
-    // the column's edges in its tile: bits 8 .. 23 of its window
-    var own = 0u;
-    if (span.y < span.z) { own = edge_bits[window_word(l, span.x, span.y / TILE)] >> 8u; }
-    for (var y = span.y; y < span.z; y++) {
-        let tested = col && y >= b && y + b < h;
-        if (tested && ((own >> (y - span.y)) & 1u) != 0u && (P.use_mask == 0u || mask[loff(l) + y * w + span.x] != 0u)) {
-            todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, y - span.y);
+    // the column's edges in its tile (bits 8 .. 23 of its window) that are
+    // tested, as row bits; then a loop over those only (an if-body in the walk
+    // would run every row, masked, on a SIMD software rasteriser)
+    var rows = 0u;
+    if (span.y < span.z && col) {
+        rows = (edge_bits[window_word(l, span.x, span.y / TILE)] >> 8u) & 0xffffu;
+        for (var y = span.y; y < span.z; y++) {
+            rows &= ~(u32(y < b || y + b >= h) << (y - span.y));
+        }
+        rows &= (1u << (span.z - span.y)) - 1u;
+    }
+    while (rows != 0u) {
+        let r = countTrailingZeros(rows);
+        rows &= rows - 1u;
+        if (P.use_mask == 0u || mask[loff(l) + (span.y + r) * w + span.x] != 0u) {
+            todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, r);
         }
     }
     workgroupBarrier();
