@@ -22,32 +22,50 @@ const UMAX: array<i32, 16> = array<i32, 16>(15, 15, 15, 15, 14, 14, 14, 13, 13, 
 
 // This invocation's share of (m10, m01) over the disc around (x, y) (those
 // pixels of the 31x31 square with |u| <= UMAX[|v|]): lane k < 62 takes column
-// u = k % 31 - 15 and half of its rows (v <= 0 for k < 31, v > 0 after), and
-// walks them with the column's packed word cached, a read per four rows.
-// Reads clamp: the CPU's border branch, which its test shows equal to the
-// interior one. The whole sums are below 2^21 in magnitude.
+// u = k % 31 - 15 and half of its rows (v <= 0 for k < 31, v > 0 after). The
+// disc is symmetric about its diagonal (src/spec/angle.rs tests it), so column
+// u holds the rows |v| <= UMAX[|u|]: a range, which the lane walks a packed
+// word (four rows) per iteration, all of it unconditionally. Reads clamp (the
+// CPU's border branch, which its test shows equal to the interior one): rows
+// above the level read row 0 and rows below it row h - 1, added apart. The
+// whole sums are below 2^21 in magnitude.
 fn moments_part(l: u32, x: i32, y: i32, lane: u32) -> vec2<i32> {
-    var m10 = 0;
-    var m01 = 0;
     if (lane >= 62u) { return vec2(0, 0); }
     let u = i32(lane % 31u) - HALF_PATCH;
     let top = lane < 31u;
+    let vm = UMAX[abs(u)];
+    let v0 = select(1, -vm, top);
+    let v1 = select(vm, 0, top);
+    let h = i32(lh(l));
     let cx = clamped_xy(l, x + u, 0).x;
-    var cg = 0xffffffffu;
-    var cw = 0u;
-    for (var v = select(1, -HALF_PATCH, top); v <= select(HALF_PATCH, 0, top); v++) {
-        if (abs(u) <= UMAX[abs(v)]) {
-            let r = clamped_xy(l, 0, y + v).y;
-            if ((r >> 2u) != cg) {
-                cw = gray[pk_word(l, cx, r)];
-                cg = r >> 2u;
-            }
-            let p = i32(pk_byte(cw, r));
-            m10 += u * p;
-            m01 += v * p;
-        }
+    // the rows of the level, each once: sum of p and of v p
+    let r0 = max(y + v0, 0);
+    let r1 = min(y + v1, h - 1);
+    var s = 0;
+    var sv = 0;
+    for (var k = r0 & ~3; k <= r1; k += 4) {
+        let rows = vec4<i32>(k) + vec4<i32>(0, 1, 2, 3);
+        let inside = (rows >= vec4<i32>(r0)) & (rows <= vec4<i32>(r1));
+        let p = select(vec4<i32>(0), vec4<i32>(pk_rows(gray[pk_word(l, cx, u32(k))])), inside);
+        s += p.x + p.y + p.z + p.w;
+        sv += dot(p, rows - vec4<i32>(y));
     }
-    return vec2(m10, m01);
+    // rows v0 .. a1 lie above the level (read row 0), b0 .. v1 below it (row h - 1)
+    let a1 = min(v1, -y - 1);
+    if (a1 >= v0) {
+        let p = i32(pk_byte(gray[pk_word(l, cx, 0u)], 0u));
+        let n = a1 - v0 + 1;
+        s += n * p;
+        sv += (n * (v0 + a1) / 2) * p;
+    }
+    let b0 = max(v0, h - y);
+    if (v1 >= b0) {
+        let p = i32(pk_byte(gray[pk_word(l, cx, u32(h - 1))], u32(h - 1)));
+        let n = v1 - b0 + 1;
+        s += n * p;
+        sv += (n * (b0 + v1) / 2) * p;
+    }
+    return vec2(u * s, sv);
 }
 
 // 0 for directions in [0°, 180°), 1 for [180°, 360°); (0, 0) counts as 0°.

@@ -130,6 +130,20 @@ mod tests {
         assert_eq!(compute_umax(15), UMAX.to_vec());
     }
 
+    /// OpenCV builds `umax` so the disc is symmetric about its diagonal: row
+    /// `v` holds `|u| <= UMAX[|v|]` exactly when column `u` holds `|v| <=
+    /// UMAX[|u|]`. shaders/orientation.wgsl walks the disc by columns on that.
+    #[test]
+    fn umax_disc_is_symmetric_about_its_diagonal() {
+        for u in -HALF_PATCH..=HALF_PATCH {
+            for v in -HALF_PATCH..=HALF_PATCH {
+                let by_row = u.abs() <= UMAX[v.unsigned_abs() as usize];
+                let by_column = v.abs() <= UMAX[u.unsigned_abs() as usize];
+                assert_eq!(by_row, by_column, "({u}, {v})");
+            }
+        }
+    }
+
     #[test]
     fn bins_agree_with_float_angles_away_from_boundaries() {
         let bins = AngleBins::new(30);
