@@ -20,13 +20,14 @@ const STRONG: u32 = 4u;
 // missing neighbour matches no searched class, as rule_at only looks for
 // WEAK_STRONG and WEAK_WEAK; rows past the last of a word are NONE too).
 fn words3(l: u32, x: u32, y: i32) -> vec3<u32> {
-    var r = vec3<u32>(0u);
-    if (y < 0 || y >= i32(lh(l))) { return r; }
-    let i = pk_word(l, x, u32(y));
-    if (x > 0u) { r.x = classes[i - 1u]; }
-    r.y = classes[i];
-    if (x + 1u < lw(l)) { r.z = classes[i + 1u]; }
-    return r;
+    // the three loads unconditional (clamped row and columns), then zeroed
+    // outside the level
+    let inside = y >= 0 && y < i32(lh(l));
+    let i = pk_word(l, x, u32(clamp(y, 0, i32(lh(l)) - 1)));
+    let left = classes[i - select(0u, 1u, x > 0u)];
+    let right = classes[i + select(0u, 1u, x + 1u < lw(l))];
+    let r = vec3<u32>(select(0u, left, x > 0u), classes[i], select(0u, right, x + 1u < lw(l)));
+    return select(vec3<u32>(0u), r, inside);
 }
 
 // True iff one of the 8 neighbours of the centre of the 3x3 window (a above,
