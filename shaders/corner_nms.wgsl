@@ -59,31 +59,11 @@ fn suppress(l: u32, p: vec2<u32>) {
     corners[slot] = k;
 }
 
-// Work-efficient: a column pass (tile_column) that lists its four tiles'
-// candidates in `todo` (workgroup memory) as it walks them; after one barrier
-// the workgroup's invocations take the list side by side, so the square scan
-// runs in as few SIMD lanes / warps as there are candidates. Entries:
-// list_entry (common.wgsl).
-var<workgroup> todo: array<u32, 1024>;
-// zero at the start of the workgroup (WGSL zero-initialises workgroup memory)
-var<workgroup> todo_n: atomic<u32>;
-
+// Work-efficient: the column's candidates are listed (list_candidates,
+// cand_list.wgsl, appended to this shader), then taken side by side.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let span = column_span(wg, li);
-    let l = span.w;
-    // the column's candidates as row bits (`cand` is column-packed: a word per
-    // four rows), then a loop over those only (an if-body in the walk would
-    // run every row, masked, on a SIMD software rasteriser)
-    var rows = 0u;
-    for (var y = span.y; y < span.z; y += 4u) {
-        rows |= bits4(pk_rows(cand[pk_word(l, span.x, y)]) != vec4<u32>(0u)) << (y - span.y);
-    }
-    while (rows != 0u) {
-        let r = countTrailingZeros(rows);
-        rows &= rows - 1u;
-        todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, r);
-    }
+    list_candidates(column_span(wg, li), li.x);
     workgroupBarrier();
     let n = atomicLoad(&todo_n);
     for (var k = li.x; k < n; k += 64u) {

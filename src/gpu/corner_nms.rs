@@ -7,7 +7,9 @@ use super::kernel::{Binding, PARAMS, Slot, b};
 use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
-pub const SOURCE: &str = include_str!("../../shaders/corner_nms.wgsl");
+/// (with shaders/cand_list.wgsl, the candidate work list it shares).
+pub const SOURCE: &str =
+    concat!(include_str!("../../shaders/corner_nms.wgsl"), include_str!("../../shaders/cand_list.wgsl"));
 /// Its bindings.
 pub const BINDINGS: &[Binding] = &[
     PARAMS,

@@ -6,7 +6,9 @@ use super::kernel::{Binding, PARAMS, Slot, b};
 use super::pass::{Groups, simple_pass};
 
 /// The shader source (without the common prelude).
-pub const SOURCE: &str = include_str!("../../shaders/response.wgsl");
+/// (with shaders/cand_list.wgsl, the candidate work list it shares).
+pub const SOURCE: &str =
+    concat!(include_str!("../../shaders/response.wgsl"), include_str!("../../shaders/cand_list.wgsl"));
 /// Its bindings.
 pub const BINDINGS: &[Binding] =
     &[PARAMS, b(1, "cand", Slot::Read), b(2, "denoised", Slot::Read), b(3, "resp", Slot::ReadWrite)];
