@@ -32,24 +32,23 @@ fn window_word(l: u32, x: u32, ty: u32) -> u32 {
     return (P.tiles[l].x + ty * P.tiles[l].y + x / TILE) * TILE + x % TILE;
 }
 
-// Rows y - r .. y + r of column x (bit j = row y - r + j) for a pixel of tile
-// row ty = y / 16 (r <= 7).
-fn column_bits(l: u32, x: i32, y: u32, r: u32) -> u32 {
-    let ty = y / TILE;
-    return (edge_bits[window_word(l, u32(x), ty)] >> (y % TILE + 8u - r)) & ((1u << (2u * r + 1u)) - 1u);
+// Rows row .. row + n - 1 of column x (bit j = row row + j), read from the
+// window of tile row ty: for a pixel of that tile row, every row its test
+// reads (up to 7 away) lies in the window.
+fn window_rows(l: u32, x: i32, ty: u32, row: i32, n: u32) -> u32 {
+    return (edge_bits[window_word(l, u32(x), ty)] >> u32(row - i32(ty * TILE) + 8)) & ((1u << n) - 1u);
 }
 
 // Step 4: does circle point t support the corner at p? q = 2t - p supports it
 // when it is an edge, or when at least `support` of its 8 neighbours are.
 fn supports(l: u32, px: i32, py: i32, t: u32, support: u32) -> bool {
     let qx = px + 2 * circle_dx(t);
-    let qy = u32(py + 2 * circle_dy(t));
+    let qy = py + 2 * circle_dy(t);
     // rows qy-1..qy+1 of columns qx-1, qx, qx+1, read at p's tile row
-    let sh = (py % i32(TILE)) + 8 + (i32(qy) - py) - 1;
     let ty = u32(py) / TILE;
-    let left = (edge_bits[window_word(l, u32(qx - 1), ty)] >> u32(sh)) & 7u;
-    let mid = (edge_bits[window_word(l, u32(qx), ty)] >> u32(sh)) & 7u;
-    let right = (edge_bits[window_word(l, u32(qx + 1), ty)] >> u32(sh)) & 7u;
+    let left = window_rows(l, qx - 1, ty, qy - 1, 3u);
+    let mid = window_rows(l, qx, ty, qy - 1, 3u);
+    let right = window_rows(l, qx + 1, ty, qy - 1, 3u);
     if ((mid & 2u) != 0u) { return true; }
     return countOneBits(left) + countOneBits(right) + countOneBits(mid) >= support;
 }
@@ -60,14 +59,14 @@ fn cbit(c: u32, j: u32, i: u32) -> u32 { return ((c >> j) & 1u) << i; }
 // The 16-bit mask of edge pixels on the circle around p (bit i = circle point
 // i): rows py-3..py+3 of columns px-3..px+3, a load each.
 fn circle_mask(l: u32, px: i32, py: i32) -> u32 {
-    let y = u32(py);
-    let c0 = column_bits(l, px - 3, y, 3u);
-    let c1 = column_bits(l, px - 2, y, 3u);
-    let c2 = column_bits(l, px - 1, y, 3u);
-    let c3 = column_bits(l, px, y, 3u);
-    let c4 = column_bits(l, px + 1, y, 3u);
-    let c5 = column_bits(l, px + 2, y, 3u);
-    let c6 = column_bits(l, px + 3, y, 3u);
+    let ty = u32(py) / TILE;
+    let c0 = window_rows(l, px - 3, ty, py - 3, 7u);
+    let c1 = window_rows(l, px - 2, ty, py - 3, 7u);
+    let c2 = window_rows(l, px - 1, ty, py - 3, 7u);
+    let c3 = window_rows(l, px, ty, py - 3, 7u);
+    let c4 = window_rows(l, px + 1, ty, py - 3, 7u);
+    let c5 = window_rows(l, px + 2, ty, py - 3, 7u);
+    let c6 = window_rows(l, px + 3, ty, py - 3, 7u);
     // circle point i at (dx, dy) is bit dy + 3 of c[dx + 3]
     return cbit(c3, 0u, 0u) | cbit(c4, 0u, 1u) | cbit(c5, 1u, 2u) | cbit(c6, 2u, 3u)
         | cbit(c6, 3u, 4u) | cbit(c6, 4u, 5u) | cbit(c5, 5u, 6u) | cbit(c4, 6u, 7u)
@@ -190,10 +189,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     var rows = 0u;
     if (span.y < span.z && col) {
         rows = (edge_bits[window_word(l, span.x, span.y / TILE)] >> 8u) & 0xffffu;
+        // (rows past the level's last are 0 in the window)
         for (var y = span.y; y < span.z; y++) {
             rows &= ~(u32(y < b || y + b >= h) << (y - span.y));
         }
-        rows &= (1u << (span.z - span.y)) - 1u;
     }
     while (rows != 0u) {
         let r = countTrailingZeros(rows);
