@@ -69,8 +69,17 @@ fn quota(l: u32) -> u32 { return P.quotas[l / 4u][l % 4u]; }
 const NO_TILE: u32 = 0xffffffffu;
 fn tile_origin(t: u32) -> vec3<u32> {
     if (t >= P.total_tiles) { return vec3<u32>(NO_TILE, NO_TILE, 0u); }
+    // The level holding tile t: the last whose first tile is <= t (selects
+    // with constant indices for the usual levels, a loop only past 8).
     var l = 0u;
-    for (var k = 1u; k < P.n_levels; k++) {
+    l = select(l, 1u, 1u < P.n_levels && t >= P.tiles[1].x);
+    l = select(l, 2u, 2u < P.n_levels && t >= P.tiles[2].x);
+    l = select(l, 3u, 3u < P.n_levels && t >= P.tiles[3].x);
+    l = select(l, 4u, 4u < P.n_levels && t >= P.tiles[4].x);
+    l = select(l, 5u, 5u < P.n_levels && t >= P.tiles[5].x);
+    l = select(l, 6u, 6u < P.n_levels && t >= P.tiles[6].x);
+    l = select(l, 7u, 7u < P.n_levels && t >= P.tiles[7].x);
+    for (var k = 8u; k < P.n_levels; k++) {
         if (t >= P.tiles[k].x) { l = k; }
     }
     let r = t - P.tiles[l].x;

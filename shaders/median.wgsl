@@ -9,12 +9,9 @@
 // |G - Gn| > delta * G for all four neighbours (up, down, left, right), as
 // integers (u32 cannot overflow: delta_den <= 10^4, delta_num <= 10^6, values <= 255).
 fn is_noise(g: u32, n: vec4<u32>) -> bool {
-    let lim = P.delta_num * g;
-    for (var i = 0u; i < 4u; i++) {
-        let d = select(n[i] - g, g - n[i], g >= n[i]);
-        if (P.delta_den * d <= lim) { return false; }
-    }
-    return true;
+    let gv = vec4<u32>(g);
+    let d = select(n - gv, gv - n, gv >= n);
+    return all(vec4<u32>(P.delta_den) * d > vec4<u32>(P.delta_num * g));
 }
 
 // The 19-exchange network of median9 in src/cpu/median.rs, written out with
@@ -61,6 +58,21 @@ fn words3_at(l: u32, xl: u32, x: u32, xr: u32, y: u32) -> vec3<u32> {
     return vec3<u32>(src[pk_word(l, xl, yc)], src[pk_word(l, x, yc)], src[pk_word(l, xr, yc)]);
 }
 
+// Row y + r + 1 (clamped into the level) of the three columns, from this
+// group's words or the next's.
+fn below(cur: vec3<u32>, nxt: vec3<u32>, y: u32, r: u32, h: u32) -> vec3<u32> {
+    let yc = min(y + r + 1u, h - 1u);
+    return pk_byte3(select(nxt, cur, (yc >> 2u) == (y >> 2u)), yc);
+}
+
+// D of row yy in its place in the word, from rows a (above), b, c (below);
+// 0 past the walk's end.
+fn out_row(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>, yy: u32, end: u32) -> u32 {
+    var v = b.y;
+    if (is_noise(v, vec4<u32>(a.y, c.y, b.x, b.z))) { v = median9(a, b, c); }
+    return select(0u, pk_place(v, yy), yy < end);
+}
+
 // A column pass (tile_column): each invocation walks one column of a tile
 // with the 3x3 window in registers: an outer loop over the words (four rows)
 // reads the next group's three words unconditionally, an inner one takes the
@@ -84,19 +96,14 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     for (var y = span.y; y < span.z; y += 4u) {
         // the next group's words (its first row, clamped, is row y + 4's)
         let nxt = words3_at(l, xl, x, xr, y + 4u);
-        var word = 0u;
-        for (var r = 0u; r < 4u; r++) {
-            let yy = y + r;
-            // row yy + 1 clamped: in this group's words for r < 3, else the next's
-            let yc = min(yy + 1u, h - 1u);
-            let c = pk_byte3(select(nxt, cur, (yc >> 2u) == (y >> 2u)), yc);
-            var v = b.y;
-            if (is_noise(v, vec4<u32>(a.y, c.y, b.x, b.z))) { v = median9(a, b, c); }
-            // rows past the walk's end stay 0 (rows past the level's last are 0)
-            word |= select(0u, pk_place(v, yy), yy < span.z);
-            a = b;
-            b = c;
-        }
+        let c0 = below(cur, nxt, y, 0u, h);
+        let c1 = below(cur, nxt, y, 1u, h);
+        let c2 = below(cur, nxt, y, 2u, h);
+        let c3 = below(cur, nxt, y, 3u, h);
+        let word = out_row(a, b, c0, y, span.z) | out_row(b, c0, c1, y + 1u, span.z)
+            | out_row(c0, c1, c2, y + 2u, span.z) | out_row(c1, c2, c3, y + 3u, span.z);
+        a = c2;
+        b = c3;
         dst[pk_word(l, x, y)] = word;
         cur = nxt;
     }
