@@ -50,11 +50,43 @@ fn s3(g: array<vec2<i32>, 3>, valid: vec3<bool>) -> vec3<u32> {
     return select(vec3<u32>(0u), vec3<u32>(s0, s1, s2), valid);
 }
 
+// The walk's window at row yy: S of rows yy - 1 (up) and yy (mid) at columns
+// x-1..x+1, the gradients of row yy, D of row yy + 1 at columns x-1..x+2.
+struct Walk {
+    up: vec3<u32>,
+    mid: vec3<u32>,
+    g: array<vec2<i32>, 3>,
+    dnext: vec4<i32>,
+}
+
+// Row yy of the group of rows y..y+3 (words `cur`, the next group's `nxt`):
+// its M8 and NMS flag in their places (0 past the walk's end), and the window
+// moved down a row. Called four times per group, rows written out: a loop
+// over the rows costs a SIMD software rasteriser its mask bookkeeping.
+fn row_step(s: ptr<function, Walk>, l: u32, y: u32, yy: u32, cur: vec4<u32>, nxt: vec4<u32>, h: u32, cols: vec3<bool>, end: u32) -> vec2<u32> {
+    // row yy + 1: its S (0 below the last row) and, next time, its gradients
+    let y2 = min(yy + 2u, h - 1u);
+    let dnn = d4_at(l, select(nxt, cur, (y2 >> 2u) == (y >> 2u)), y2);
+    let gn = grad3((*s).dnext, dnn);
+    let down = s3(gn, select(vec3<bool>(false), cols, yy + 1u < h));
+    let v = (*s).mid.y;
+    // v > first >= 0 keeps only S > 0 (SPEC 3 suppresses S = 0)
+    let ab = sector_pair((*s).g[1].x, (*s).g[1].y, (*s).up, (*s).mid, down);
+    let keep = select(0u, 1u, v > ab.x && v >= ab.y);
+    let m8 = min(magnitude(v), 255u);
+    (*s).up = (*s).mid;
+    (*s).mid = down;
+    (*s).g = gn;
+    (*s).dnext = dnn;
+    // rows past the walk's end stay 0 (rows past the level's last are 0)
+    return select(vec2<u32>(0u), vec2<u32>(pk_place(m8, yy), pk_place(keep, yy)), yy < end);
+}
+
 // A column pass (tile_column): the invocation of column x walks its rows with
 // D of columns x-1..x+2 and S of columns x-1..x+1 in registers (rows y-1, y,
 // y+1). An outer loop over the column's words (four rows) reads the next
 // group's four words of D and writes one word of `m` and of `nms`, all
-// unconditionally; an inner loop takes the rows. (Loads cached under `if` and
+// unconditionally; `row_step` takes the four rows. (Loads cached under `if` and
 // stores under `if`, the earlier form, ran every row on a SIMD software
 // rasteriser, which executes an if-body masked for every lane.)
 @compute @workgroup_size(64, 1, 1)
@@ -65,46 +97,27 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let x = span.x;
     let h = lh(l);
     let cols = vec3<bool>(x > 0u, true, x + 1u < lw(l));
-    let none = vec3<bool>(false);
     // S of row y0 - 1 (none above row 0), gradients and S of row y0
     var cur = d4_words(l, x, span.y);
-    var up = vec3<u32>(0u);
+    var walk: Walk;
+    walk.up = vec3<u32>(0u);
     if (span.y > 0u) {
         // row y0 - 1 is the last of the group before
-        up = s3(grad3(d4_at(l, d4_words(l, x, span.y - 1u), span.y - 1u), d4_at(l, cur, span.y)), cols);
+        walk.up = s3(grad3(d4_at(l, d4_words(l, x, span.y - 1u), span.y - 1u), d4_at(l, cur, span.y)), cols);
     }
-    var dnext = d4_at(l, cur, span.y + 1u);
-    var g = grad3(d4_at(l, cur, span.y), dnext);
-    var mid = s3(g, cols);
+    walk.dnext = d4_at(l, cur, span.y + 1u);
+    walk.g = grad3(d4_at(l, cur, span.y), walk.dnext);
+    walk.mid = s3(walk.g, cols);
     for (var y = span.y; y < span.z; y += 4u) {
         // rows y + 4 .. y + 7 (clamped): rows y + 2 .. y + 5 feed this group
         let nxt = d4_words(l, x, y + 4u);
-        var mags = 0u;
-        var flags = 0u;
-        for (var r = 0u; r < 4u; r++) {
-            let yy = y + r;
-            // row yy + 1: its S (0 below the last row) and, next time, its gradients
-            let y2 = min(yy + 2u, h - 1u);
-            let dnn = d4_at(l, select(nxt, cur, (y2 >> 2u) == (y >> 2u)), y2);
-            let gn = grad3(dnext, dnn);
-            let down = s3(gn, select(none, cols, yy + 1u < h));
-            let v = mid.y;
-            // v > first >= 0 keeps only S > 0 (SPEC 3 suppresses S = 0)
-            let ab = sector_pair(g[1].x, g[1].y, up, mid, down);
-            let keep = select(0u, 1u, v > ab.x && v >= ab.y);
-            let m8 = min(magnitude(v), 255u);
-            // rows past the walk's end stay 0 (rows past the level's last are 0)
-            let inside = yy < span.z;
-            mags |= select(0u, pk_place(m8, yy), inside);
-            flags |= select(0u, pk_place(keep, yy), inside);
-            up = mid;
-            mid = down;
-            g = gn;
-            dnext = dnn;
-        }
+        var out = row_step(&walk, l, y, y, cur, nxt, h, cols, span.z);
+        out |= row_step(&walk, l, y, y + 1u, cur, nxt, h, cols, span.z);
+        out |= row_step(&walk, l, y, y + 2u, cur, nxt, h, cols, span.z);
+        out |= row_step(&walk, l, y, y + 3u, cur, nxt, h, cols, span.z);
         // `m` and `nms` are column-packed: a word each per four rows
-        m[pk_word(l, x, y)] = mags;
-        nms[pk_word(l, x, y)] = flags;
+        m[pk_word(l, x, y)] = out.x;
+        nms[pk_word(l, x, y)] = out.y;
         cur = nxt;
     }
 }

@@ -38,19 +38,22 @@ fn has_neighbour(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>, k: u32) -> bool {
 
 // The class of the window's centre after rules 1 and 2 (rule_at in the CPU module).
 fn rule_at(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>) -> u32 {
-    if (b.y == WEAK_STRONG) {
-        return select(WEAK, STRONG, has_neighbour(a, b, c, WEAK_STRONG));
-    }
-    if (b.y == WEAK_WEAK) {
-        return select(WEAK, NONE, has_neighbour(a, b, c, WEAK_WEAK));
-    }
-    return b.y;
+    // selects, not early returns: both tests are a few lanes' ALU
+    let ws = select(WEAK, STRONG, has_neighbour(a, b, c, WEAK_STRONG));
+    let ww = select(WEAK, NONE, has_neighbour(a, b, c, WEAK_WEAK));
+    return select(select(b.y, ww, b.y == WEAK_WEAK), ws, b.y == WEAK_STRONG);
+}
+
+// Row yy's ruled class in its place in the word (window rows a, b, c); 0
+// (NONE) past the walk's end.
+fn ruled_row(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>, yy: i32, end: i32) -> u32 {
+    return select(0u, pk_place(rule_at(a, b, c), u32(yy)), yy < end);
 }
 
 // A column pass (tile_column): the 3x3 window walks down in registers. An
 // outer loop over the column's words (four rows) reads the next group's three
-// words and writes one word of `ruled`, unconditionally; an inner loop takes
-// the rows (see median.wgsl for why not under `if`).
+// words and writes one word of `ruled`, unconditionally; the four rows are
+// written out (`ruled_row`: a loop costs a SIMD software rasteriser its masks) (see median.wgsl for why not under `if`).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
@@ -58,21 +61,21 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let l = span.w;
     let x = span.x;
     let y0 = i32(span.y);  // a multiple of 4: the first row of its words
+    let end = i32(span.z);
     var a = pk_byte3(words3(l, x, y0 - 1), u32(y0 - 1));
     var cur = words3(l, x, y0);
     var b = pk_byte3(cur, u32(y0));
     for (var y = y0; y < i32(span.z); y += 4) {
         // rows y + 4 .. y + 7: row y + 4 is the last group row's `c`
         let nxt = words3(l, x, y + 4);
-        var word = 0u;
-        for (var r = 0; r < 4; r++) {
-            let yy = y + r;
-            let c = pk_byte3(select(nxt, cur, r < 3), u32(yy + 1));
-            // rows past the walk's end stay 0 (NONE)
-            word |= select(0u, pk_place(rule_at(a, b, c), u32(yy)), yy < i32(span.z));
-            a = b;
-            b = c;
-        }
+        let c0 = pk_byte3(cur, u32(y + 1));
+        let c1 = pk_byte3(cur, u32(y + 2));
+        let c2 = pk_byte3(cur, u32(y + 3));
+        let c3 = pk_byte3(nxt, u32(y + 4));
+        let word = ruled_row(a, b, c0, y, end) | ruled_row(b, c0, c1, y + 1, end)
+            | ruled_row(c0, c1, c2, y + 2, end) | ruled_row(c1, c2, c3, y + 3, end);
+        a = c2;
+        b = c3;
         ruled[pk_word(l, x, u32(y))] = word;
         cur = nxt;
     }
