@@ -29,20 +29,32 @@ fn class_of(mv: u32, t1: u32, v3: u32, alpha_pct: u32) -> u32 {
     let above_t2 = 2u * mv >= t1;
     let above_tl1 = mv >= 255u || 300u * mv >= (100u + alpha_pct) * v3;
     let above_tl2 = 300u * mv >= (100u - alpha_pct) * v3;
-    if (above_t1 && above_tl1) {
-        return STRONG;
-    } else if (above_t1 || above_tl1) {
-        return WEAK_STRONG;
-    } else if (above_t2 && above_tl2) {
-        return WEAK;
-    } else if (above_t2 || above_tl2) {
-        return WEAK_WEAK;
-    }
-    return NONE;
+    // selects, not an if-else chain of returns (a SIMD software rasteriser runs
+    // every branch anyway, and pays its mask bookkeeping)
+    let weak = select(select(NONE, WEAK_WEAK, above_t2 || above_tl2), WEAK, above_t2 && above_tl2);
+    return select(select(weak, WEAK_STRONG, above_t1 || above_tl1), STRONG, above_t1 && above_tl1);
 }
 
-// A column pass (tile_column): the window column of x is looked up once, and
-// the window rows of the walk at its ends.
+// V3 of window (i, j) of the level whose first window is win0 (nx windows along x).
+fn v3_of(win0: u32, nx: u32, i: u32, j: u32) -> u32 {
+    return windows[(win0 + j * nx + i) * 4u + 3u];
+}
+
+// The class of row yy in its place in the word: `flags` and `mags` hold its
+// NMS flag and M8, `v3` its window's V3; NONE where the level has no edges
+// (t1 = 0) or the pixel is not an NMS survivor.
+fn class_row(flags: u32, mags: u32, yy: u32, t1: u32, v3: u32) -> u32 {
+    let c = class_of(pk_byte(mags, yy), t1, v3, P.alpha_pct);
+    return pk_place(select(NONE, c, t1 != 0u && pk_byte(flags, yy) != 0u), yy);
+}
+
+// A column pass (tile_column). The window column of x is looked up once, and
+// the row windows (monotone, column-packed in `grid`: four rows a word) a word
+// per four rows. V3 of the walk's first and last rows' windows is read once;
+// a row between them in a third window (small levels, where a window is
+// shorter than a tile) is a "hard" row, looked up in a `while` loop that runs
+// only when some lane has one. Everything else is straight-line, no loads
+// under `if` (see median.wgsl).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
@@ -50,45 +62,33 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let l = span.w;
     // otsu[l] == 0: the level has no edges (t1 = None on the CPU).
     let t1 = otsu[l];
-    // WindowGrid::v3_at: the grid holds xs (nx), ys (ny), col_window (w), row_window (h).
+    // WindowGrid::v3_at: the grid holds xs (nx), ys (ny), col_window (w), row_window (packed).
     let g = P.grids[l];
     let i = grid[g.z + g.x + g.y + span.x];
-    // row_window (monotone) of the walk's first and last rows, and their V3:
-    // every row between has one of these windows when they are equal or
-    // adjacent, so a pixel reads the grid only in a walk that crosses a
-    // window boundary, and a window's V3 only past two windows (small levels).
     let rows = g.z + g.x + g.y + lw(l);
-    let win0 = P.levels[l].w + i;
-    var jt = 0u;
-    var jb = 0u;
-    var vt = 0u;
-    var vb = 0u;
-    if (t1 != 0u) {
-        jt = grid[rows + span.y];
-        jb = grid[rows + span.z - 1u];
-        vt = windows[(win0 + jt * g.x) * 4u + 3u];
-        vb = windows[(win0 + jb * g.x) * 4u + 3u];
-    }
-    // `classes`, `nms` and `m` are column-packed: an outer loop over the
-    // words (four rows) reads a word of each and writes one, unconditionally
-    // (see median.wgsl), an inner loop takes the rows
+    let win0 = P.levels[l].w;
+    let last = span.z - 1u;
+    let jt = pk_byte(grid[rows + (span.y >> 2u)], span.y);
+    let jb = pk_byte(grid[rows + (last >> 2u)], last);
+    let vt = v3_of(win0, g.x, i, jt);
+    let vb = v3_of(win0, g.x, i, jb);
     for (var y = span.y; y < span.z; y += 4u) {
+        // `classes`, `nms`, `m` and the row windows are column-packed: a word
+        // of each per four rows (rows past the level's last are 0 in `nms`: NONE)
         let flags = nms[pk_word(l, span.x, y)];
         let mags = m[pk_word(l, span.x, y)];
-        var word = 0u;
-        for (var yy = y; yy < y + 4u; yy++) {
-            // rows past the level's last are 0 in `nms`: NONE
-            var c = NONE;
-            if (t1 != 0u && pk_byte(flags, yy) != 0u) {
-                var v3 = vt;
-                if (jb != jt) {
-                    let j = grid[rows + min(yy, span.z - 1u)];
-                    v3 = select(vt, vb, j == jb);
-                    if (j != jt && j != jb) { v3 = windows[(win0 + j * g.x) * 4u + 3u]; }
-                }
-                c = class_of(pk_byte(mags, yy), t1, v3, P.alpha_pct);
-            }
-            word |= pk_place(c, yy);
+        let jw = grid[rows + (y >> 2u)];
+        let js = pk_rows(jw);
+        let v3 = select(vec4<u32>(vt), vec4<u32>(vb), js == vec4<u32>(jb));
+        var word = class_row(flags, mags, y, t1, v3.x) | class_row(flags, mags, y + 1u, t1, v3.y)
+            | class_row(flags, mags, y + 2u, t1, v3.z) | class_row(flags, mags, y + 3u, t1, v3.w);
+        var hard = bits4(js != vec4<u32>(jt) & js != vec4<u32>(jb)) & bits4(pk_rows(flags) != vec4<u32>(0u));
+        while (hard != 0u) {
+            let r = firstTrailingBit(hard);
+            hard &= hard - 1u;
+            let yy = y + r;
+            let v = v3_of(win0, g.x, i, pk_byte(jw, yy));
+            word = (word & ~pk_place(0xffu, yy)) | class_row(flags, mags, yy, t1, v);
         }
         classes[pk_word(l, span.x, y)] = word;
     }

@@ -177,7 +177,7 @@ pub struct Buffers {
     pub hist: wgpu::Buffer,
     /// Per level T1 = k + 1, or 0 when the level has no edges.
     pub otsu: wgpu::Buffer,
-    /// Window grids: per level xs, ys, col_window, row_window.
+    /// Window grids: per level xs, ys, col_window, row_window (FrameLayout::grid_data).
     pub grid: wgpu::Buffer,
     /// Per window min, max, median, V3.
     pub windows: wgpu::Buffer,

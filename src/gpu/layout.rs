@@ -97,7 +97,9 @@ pub struct FrameLayout {
     pub window_offsets: Vec<u32>,
     /// Windows of all levels.
     pub total_windows: u32,
-    /// The grid buffer: per level `xs, ys, col_window, row_window`; then, from
+    /// The grid buffer: per level `xs, ys, col_window, row_window` (the last
+    /// column-packed, [`pack_level`] of a one-column plane: four rows a word;
+    /// a window index is below [`MAX_WINDOWS_PER_AXIS`]); then, from
     /// `params.cells`, per level the header `[offset of cx, cells along x,
     /// offset of cy, cells along y]` and after the headers each level's cell
     /// cuts `cx`, `cy` ([`cell_cuts`]).
@@ -148,7 +150,9 @@ impl FrameLayout {
             grid_data.extend_from_slice(&g.xs);
             grid_data.extend_from_slice(&g.ys);
             grid_data.extend_from_slice(&g.col_window);
-            grid_data.extend_from_slice(&g.row_window);
+            // row_window column-packed (pack_level): classify reads four rows a word
+            let rows: Vec<u8> = g.row_window.iter().map(|&j| j as u8).collect();
+            grid_data.extend(pack_level(1, h, &rows));
             grids.push(g);
             if w > 2 * b && h > 2 * b {
                 capacity += ((w - 2 * b) as u64).div_ceil(r as u64 + 1) * ((h - 2 * b) as u64).div_ceil(r as u64 + 1);
