@@ -18,18 +18,18 @@ const ORB_KERNEL: array<u32, 7> = array<u32, 7>(18u, 34u, 49u, 54u, 49u, 34u, 18
 const R: i32 = 3;
 
 // BORDER_REFLECT_101 index (gfedcb|abcdefgh|gfedcba); a 1-pixel axis clamps.
-fn reflect101(i: i32, len: i32) -> i32 {
-    if (len == 1) { return 0; }
-    let period = 2 * (len - 1);
-    var j = ((i % period) + period) % period; // rem_euclid
-    if (j >= len) { j = period - j; }
-    return j;
-}
-
-// reflect101, cheap inside [0, len).
+// Folds at 0 and at len - 1 (each fold brings an index beyond len - 1 back
+// by 2 (len - 1)); the loop runs again only for offsets beyond one period,
+// which only levels a few pixels long have. No division: a SIMD software
+// rasteriser divides lane by lane, and runs the inside case's early return
+// and the fold both.
 fn reflected(i: i32, len: i32) -> u32 {
-    if (i >= 0 && i < len) { return u32(i); }
-    return u32(reflect101(i, len));
+    let p = len - 1;
+    var j = p - abs(p - abs(i));
+    while (j < 0 && p > 0) {
+        j = p - abs(p - abs(j));
+    }
+    return u32(max(j, 0));
 }
 
 // The seven taps of ORB_KERNEL over v0..v6.
@@ -51,8 +51,12 @@ fn taps4(v0: u32, v1: u32, v2: u32, v3: u32, v4: u32, v5: u32, v6: u32) -> vec4<
 //
 // Horizontal: each invocation takes four columns of one packed word row
 // (four rows) of a tile: lane r of the tile's 16 has columns 4 (r % 4) .. + 4
-// and rows 4 (r / 4) .. + 4, the seven taps' words in registers, so one gray
-// word gives four rows' taps and two blur_tmp words take them.
+// and rows 4 (r / 4) .. + 4. It reads the ten gray words of columns x0 - 3 ..
+// x0 + 6 (reflected) once, and one gray word gives four rows' taps, which two
+// blur_tmp words take. The four columns are written out, no loop, and the
+// stores are unconditional: a column past the level's edge, or a pair of rows
+// past its last row, stores the value before it again at the same place (a
+// SIMD software rasteriser runs a store under `if` for every lane).
 @compute @workgroup_size(64, 1, 1)
 fn horizontal(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let o = workgroup_tile(wg, li.x / TILE);
@@ -66,60 +70,106 @@ fn horizontal(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id
     if (x0 >= w || y0 >= h) { return; }
     let iw = i32(w);
     let ix = i32(x0);
-    var v0 = gray[pk_word(l, reflected(ix - 3, iw), y0)];
-    var v1 = gray[pk_word(l, reflected(ix - 2, iw), y0)];
-    var v2 = gray[pk_word(l, reflected(ix - 1, iw), y0)];
-    var v3 = gray[pk_word(l, x0, y0)];
-    var v4 = gray[pk_word(l, reflected(ix + 1, iw), y0)];
-    var v5 = gray[pk_word(l, reflected(ix + 2, iw), y0)];
-    let end = min(x0 + 4u, w);
-    for (var x = x0; x < end; x++) {
-        let v6 = gray[pk_word(l, reflected(i32(x) + 3, iw), y0)];
-        let t = taps4(v0, v1, v2, v3, v4, v5, v6);
-        let k = loff(l) + (y0 >> 1u) * w + x;
-        blur_tmp[k] = t.x | (t.y << 16u);
-        if (y0 + 2u < h) { blur_tmp[k + w] = t.z | (t.w << 16u); }
-        v0 = v1; v1 = v2; v2 = v3; v3 = v4; v4 = v5; v5 = v6;
-    }
+    let v0 = gray[pk_word(l, reflected(ix - 3, iw), y0)];
+    let v1 = gray[pk_word(l, reflected(ix - 2, iw), y0)];
+    let v2 = gray[pk_word(l, reflected(ix - 1, iw), y0)];
+    let v3 = gray[pk_word(l, x0, y0)];
+    let v4 = gray[pk_word(l, reflected(ix + 1, iw), y0)];
+    let v5 = gray[pk_word(l, reflected(ix + 2, iw), y0)];
+    let v6 = gray[pk_word(l, reflected(ix + 3, iw), y0)];
+    let v7 = gray[pk_word(l, reflected(ix + 4, iw), y0)];
+    let v8 = gray[pk_word(l, reflected(ix + 5, iw), y0)];
+    let v9 = gray[pk_word(l, reflected(ix + 6, iw), y0)];
+    let k = loff(l) + (y0 >> 1u) * w + x0;
+    // the second pair of rows only inside the level, else the first again
+    let below = select(0u, w, y0 + 2u < h);
+    var t = taps4(v0, v1, v2, v3, v4, v5, v6);
+    var lo = t.x | (t.y << 16u);
+    var hi = select(lo, t.z | (t.w << 16u), below != 0u);
+    blur_tmp[k] = lo;
+    blur_tmp[k + below] = hi;
+    // columns x0 + 1 .. x0 + 3 only inside the level, else column x0 + c - 1 again
+    var c = select(0u, 1u, x0 + 1u < w);
+    t = taps4(v1, v2, v3, v4, v5, v6, v7);
+    lo = select(lo, t.x | (t.y << 16u), c == 1u);
+    hi = select(hi, select(lo, t.z | (t.w << 16u), below != 0u), c == 1u);
+    blur_tmp[k + c] = lo;
+    blur_tmp[k + c + below] = hi;
+    c = select(c, 2u, x0 + 2u < w);
+    t = taps4(v2, v3, v4, v5, v6, v7, v8);
+    lo = select(lo, t.x | (t.y << 16u), c == 2u);
+    hi = select(hi, select(lo, t.z | (t.w << 16u), below != 0u), c == 2u);
+    blur_tmp[k + c] = lo;
+    blur_tmp[k + c + below] = hi;
+    c = select(c, 3u, x0 + 3u < w);
+    t = taps4(v3, v4, v5, v6, v7, v8, v9);
+    lo = select(lo, t.x | (t.y << 16u), c == 3u);
+    hi = select(hi, select(lo, t.z | (t.w << 16u), below != 0u), c == 3u);
+    blur_tmp[k + c] = lo;
+    blur_tmp[k + c + below] = hi;
 }
 
-// Row y of column x of `blur_tmp` (level l); `cw` caches the pair word of
-// pair `cg` (the walk's rows move down, bar the reflected ones at the ends).
-fn tmp_at(l: u32, x: u32, y: u32, cg: ptr<function, u32>, cw: ptr<function, u32>) -> u32 {
-    if ((y >> 1u) != *cg) {
-        *cw = blur_tmp[loff(l) + (y >> 1u) * lw(l) + x];
-        *cg = y >> 1u;
-    }
-    return (*cw >> ((y & 1u) * 16u)) & 0xffffu;
+// Row y (inside level l) of column x of `blur_tmp`.
+fn tmp_row(l: u32, x: u32, y: u32) -> u32 {
+    return (blur_tmp[loff(l) + (y >> 1u) * lw(l) + x] >> ((y & 1u) * 16u)) & 0xffffu;
 }
 
-// A column pass (tile_column): each invocation walks one column of a tile,
-// a blur_tmp word per two rows, and writes `smoothed` column-packed.
+// Row y of the smoothed column from blur_tmp rows y - 3 .. y + 3, in its place
+// in the packed word; 0 past the walk's end.
+fn smoothed_row(v0: u32, v1: u32, v2: u32, v3: u32, v4: u32, v5: u32, v6: u32, y: u32, end: u32) -> u32 {
+    return select(0u, pk_place((taps(v0, v1, v2, v3, v4, v5, v6) + (1u << 15u)) >> 16u, y), y < end);
+}
+
+// A column pass (tile_column): each invocation walks one column of a tile and
+// writes `smoothed` column-packed, a word per four rows. It keeps blur_tmp
+// rows y - 3 .. y + 3 in registers; the loop over the words reads rows y + 4
+// .. y + 7, two pair words, unconditionally (pair index clamped into the
+// level), and the four rows are written out. Rows past the level's last (at
+// most three are needed, reflected) are read again in a `while` loop that
+// only runs in the walks at the bottom of a level.
 @compute @workgroup_size(64, 1, 1)
 fn vertical(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let id = tile_column(wg, li);
-    let l = id.z;
-    if (id.x >= lw(l) || id.y >= lh(l)) { return; }
-    let h = i32(lh(l));
-    let x = id.x;
-    let y0 = i32(id.y);
-    var cg = 0xffffffffu;
-    var cw = 0u;
-    var v0 = tmp_at(l, x, reflected(y0 - 3, h), &cg, &cw);
-    var v1 = tmp_at(l, x, reflected(y0 - 2, h), &cg, &cw);
-    var v2 = tmp_at(l, x, reflected(y0 - 1, h), &cg, &cw);
-    var v3 = tmp_at(l, x, u32(y0), &cg, &cw);
-    var v4 = tmp_at(l, x, reflected(y0 + 1, h), &cg, &cw);
-    var v5 = tmp_at(l, x, reflected(y0 + 2, h), &cg, &cw);
-    let end = u32(min(y0 + i32(TILE), h));
-    var word = 0u;
-    for (var y = id.y; y < end; y++) {
-        let v6 = tmp_at(l, x, reflected(i32(y) + 3, h), &cg, &cw);
-        word |= pk_place((taps(v0, v1, v2, v3, v4, v5, v6) + (1u << 15u)) >> 16u, y);
-        if (pk_complete(y, end)) {
-            smoothed[pk_word(l, x, y)] = word;
-            word = 0u;
+    let span = column_span(wg, li);
+    if (span.y == span.z) { return; }
+    let l = span.w;
+    let x = span.x;
+    let h = lh(l);
+    let ih = i32(h);
+    let y0 = i32(span.y);
+    let col = loff(l) + x;
+    let w = lw(l);
+    let last_pair = (h - 1u) >> 1u;
+    var a0 = tmp_row(l, x, reflected(y0 - 3, ih));
+    var a1 = tmp_row(l, x, reflected(y0 - 2, ih));
+    var a2 = tmp_row(l, x, reflected(y0 - 1, ih));
+    var a3 = tmp_row(l, x, span.y);
+    var a4 = tmp_row(l, x, reflected(y0 + 1, ih));
+    var a5 = tmp_row(l, x, reflected(y0 + 2, ih));
+    var a6 = tmp_row(l, x, reflected(y0 + 3, ih));
+    for (var y = span.y; y < span.z; y += 4u) {
+        let p = blur_tmp[col + min((y + 4u) >> 1u, last_pair) * w];
+        let q = blur_tmp[col + min((y + 6u) >> 1u, last_pair) * w];
+        var b4 = p & 0xffffu;
+        var b5 = p >> 16u;
+        var b6 = q & 0xffffu;
+        var b7 = q >> 16u;
+        // rows past the level's last: their reflection (bottom walks only)
+        let inside = min(select(0u, h - (y + 4u), h > y + 4u), 4u);
+        var past = 0xfu & ~((1u << inside) - 1u);
+        while (past != 0u) {
+            let k = firstTrailingBit(past);
+            past &= past - 1u;
+            let v = tmp_row(l, x, reflected(i32(y + 4u + k), ih));
+            b4 = select(b4, v, k == 0u);
+            b5 = select(b5, v, k == 1u);
+            b6 = select(b6, v, k == 2u);
+            b7 = select(b7, v, k == 3u);
         }
-        v0 = v1; v1 = v2; v2 = v3; v3 = v4; v4 = v5; v5 = v6;
+        let word = smoothed_row(a0, a1, a2, a3, a4, a5, a6, y, span.z)
+            | smoothed_row(a1, a2, a3, a4, a5, a6, b4, y + 1u, span.z)
+            | smoothed_row(a2, a3, a4, a5, a6, b4, b5, y + 2u, span.z)
+            | smoothed_row(a3, a4, a5, a6, b4, b5, b6, y + 3u, span.z);
+        smoothed[pk_word(l, x, y)] = word;
+        a0 = a4; a1 = a5; a2 = a6; a3 = b4; a4 = b5; a5 = b6; a6 = b7;
     }
 }
