@@ -82,8 +82,15 @@ fn tile_origin(t: u32) -> vec3<u32> {
     for (var k = 8u; k < P.n_levels; k++) {
         if (t >= P.tiles[k].x) { l = k; }
     }
+    // (r % tx, r / tx) without an integer division (lane by lane on a SIMD
+    // software rasteriser): the f32 quotient is within one of it (r < 2^24),
+    // then one exact correction either way
     let r = t - P.tiles[l].x;
-    return vec3<u32>((r % P.tiles[l].y) * TILE, (r / P.tiles[l].y) * TILE, l);
+    let tx = P.tiles[l].y;
+    var q = u32(f32(r) / f32(tx));
+    q = select(q, q - 1u, q * tx > r);
+    q = select(q, q + 1u, (q + 1u) * tx <= r);
+    return vec3<u32>((r - q * tx) * TILE, q * TILE, l);
 }
 
 // (x, y, level) of this invocation of a 16x16 workgroup, one per tile;
