@@ -45,9 +45,8 @@ fn holding(o: u32, n: u32, size: u32, c0: u32, c1: u32) -> vec2<u32> {
     return r;
 }
 
-@compute @workgroup_size(16, 2, 1)
+@compute @workgroup_size(32, 1, 1)
 fn cells(
-    @builtin(local_invocation_id) lid: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
     @builtin(workgroup_id) wg: vec3<u32>,
 ) {
@@ -68,34 +67,54 @@ fn cells(
         let wy = holding(g.z + g.x, g.y, g.w >> 16u, y0, y1);
         win = vec4<u32>(wx, wy);
     }
-    // Columns lid.x, lid.x + 16, ... of the cell, words (four rows, `m` is
-    // column-packed) lid.y, lid.y + 2, ... of those covering its rows.
-    // Runs of equal values (flat regions) are counted locally and added once.
+    // Columns li, li + 32, ... of the cell, each down its rows a word (four
+    // rows, `m` is column-packed) at a time.
+    // Runs of equal values (flat regions) are counted locally and added once:
+    // the run carried in (run_v, run_n) and, per word, the rows where a run
+    // ends as bits, added in a `while` loop that runs as often as the
+    // busiest lane needs (an atomic under a per-row `if` costs every lane
+    // every row on a SIMD software rasteriser).
     var run_v = 0u;
     var run_n = 0u;
-    for (var g4 = (y0 >> 2u) + lid.y; g4 * 4u < y1; g4 += 2u) {
-        let r0 = max(g4 * 4u, y0);
-        let r1 = min(g4 * 4u + 4u, y1);
-        for (var x = x0 + lid.x; x < x1; x += 16u) {
-            let word = m[pk_word(l, x, r0)];
-            for (var y = r0; y < r1; y++) {
-                let v = pk_byte(word, y);
-                if (v != run_v && run_n != 0u) {
-                    atomicAdd(&bins[run_v], run_n);
-                    run_n = 0u;
-                }
-                run_v = v;
-                run_n += 1u;
+    for (var x = x0 + li; x < x1; x += 32u) {
+        for (var g4 = y0 >> 2u; g4 * 4u < y1; g4++) {
+            // rows a..b (of the word's four) inside the cell, a contiguous range
+            let a = max(g4 * 4u, y0) - g4 * 4u;
+            let b = min(g4 * 4u + 4u, y1) - 1u - g4 * 4u;
+            let inside = (0xfu >> (3u - b)) & ~((1u << a) - 1u);
+            let word = m[pk_word(l, x, g4 * 4u)];
+            let v = pk_rows(word);
+            // each row's predecessor: the row above, or the carried run for row a
+            let k = vec4<u32>(0u, 1u, 2u, 3u);
+            let prev = select(vec4<u32>(run_v, v.xyz), vec4<u32>(run_v), k == vec4<u32>(a));
+            // a run ends above each row that differs (not before the first pixel)
+            var ends = bits4(v != prev) & inside & select(~(1u << a), 0xfu, run_n != 0u);
+            var start = a;
+            var n0 = run_n;
+            while (ends != 0u) {
+                let e = firstTrailingBit(ends);
+                ends &= ends - 1u;
+                atomicAdd(&bins[select(pk_byte(word, e - 1u), run_v, e == a)], n0 + e - start);
+                start = e;
+                n0 = 0u;
             }
+            run_n = n0 + b + 1u - start;
+            run_v = pk_byte(word, b);
         }
     }
     if (run_n != 0u) { atomicAdd(&bins[run_v], run_n); }
     workgroupBarrier();
     let r = win;
-    // bins li, li + 32, ...
-    for (var k = li; k < 256u; k += 32u) {
+    // bins li, li + 32, ...: the non-empty ones as bits, added in a `while`
+    // loop (most of a small or flat cell's bins are empty)
+    var full = 0u;
+    for (var q = 0u; q < 8u; q++) {
+        full |= select(0u, 1u << q, atomicLoad(&bins[li + 32u * q]) != 0u);
+    }
+    while (full != 0u) {
+        let k = li + 32u * firstTrailingBit(full);
+        full &= full - 1u;
         let c = atomicLoad(&bins[k]);
-        if (c == 0u) { continue; }
         atomicAdd(&hist[l * 256u + k], c);
         for (var j = r.z; j < r.w; j++) {
             for (var i = r.x; i < r.y; i++) {
