@@ -62,6 +62,18 @@ fn clamped_xy(l: u32, x: i32, y: i32) -> vec2<u32> {
 
 fn quota(l: u32) -> u32 { return P.quotas[l / 4u][l % 4u]; }
 
+// n / d (d > 0) without an integer division, which a SIMD software rasteriser
+// does lane by lane: the f32 quotient, then one exact correction either way.
+// Exact whenever the f32 quotient is within one of n / d: for n < 2^24 (n
+// exact in f32), and for the larger n of the pyramid's taps (n < 2^29 with
+// d > n / 2^23; tests/gpu_levels.rs, and every tap of 69 random and extreme
+// sizes checked against the integer form).
+fn udiv(n: u32, d: u32) -> u32 {
+    var q = u32(f32(n) / f32(d));
+    q = select(q, q - 1u, q * d > n);
+    return select(q, q + 1u, (q + 1u) * d <= n);
+}
+
 // Per-pixel passes are dispatched over the list of the 16x16 tiles of every
 // level (FrameLayout::pixel_groups), so no workgroup falls outside its level.
 // (x0, y0, level) of tile t's top-left pixel; NO_TILE (outside every level)
@@ -82,14 +94,10 @@ fn tile_origin(t: u32) -> vec3<u32> {
     for (var k = 8u; k < P.n_levels; k++) {
         if (t >= P.tiles[k].x) { l = k; }
     }
-    // (r % tx, r / tx) without an integer division (lane by lane on a SIMD
-    // software rasteriser): the f32 quotient is within one of it (r < 2^24),
-    // then one exact correction either way
+    // (r % tx, r / tx): r < 2^24 (udiv)
     let r = t - P.tiles[l].x;
     let tx = P.tiles[l].y;
-    var q = u32(f32(r) / f32(tx));
-    q = select(q, q - 1u, q * tx > r);
-    q = select(q, q + 1u, (q + 1u) * tx <= r);
+    let q = udiv(r, tx);
     return vec3<u32>((r - q * tx) * TILE, q * TILE, l);
 }
 

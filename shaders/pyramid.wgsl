@@ -14,17 +14,18 @@ const ONE: u32 = 2048u; // 1 << COEF_BITS
 // Source index and Q11 weight of the right/lower neighbour for destination
 // index d when resizing src_len -> dst_len, exactly as cpu::pyramid::tap:
 // the source coordinate is ((2d+1)*src - dst) / (2*dst), clamped. Sides are
-// at most MAX_SIDE = 16384, so every product fits 32 bits.
+// at most MAX_SIDE = 16384, so every product fits 32 bits (udiv: no
+// integer division).
 fn tap(d: u32, src_len: u32, dst_len: u32) -> vec2<u32> {
     let a = (2u * d + 1u) * src_len;
     let den = 2u * dst_len;
     if (a < dst_len) { return vec2(0u, 0u); }
     let num = a - dst_len;
-    let s = num / den;
+    let s = udiv(num, den);
     if (s + 1u >= src_len) { return vec2(src_len - 1u, 0u); }
     let rem = num - s * den;
     // round(rem / den * 2048), half up
-    let w = (rem * ONE * 2u + den) / (2u * den);
+    let w = udiv(rem * ONE * 2u + den, 2u * den);
     return vec2(s, w);
 }
 
