@@ -49,8 +49,7 @@ fn supports(l: u32, px: i32, py: i32, t: u32, support: u32) -> bool {
     let left = window_rows(l, qx - 1, ty, qy - 1, 3u);
     let mid = window_rows(l, qx, ty, qy - 1, 3u);
     let right = window_rows(l, qx + 1, ty, qy - 1, 3u);
-    if ((mid & 2u) != 0u) { return true; }
-    return countOneBits(left) + countOneBits(right) + countOneBits(mid) >= support;
+    return (mid & 2u) != 0u || countOneBits(left) + countOneBits(right) + countOneBits(mid) >= support;
 }
 
 // Bit i of the circle mask from bit j of a 7-row column window.
@@ -84,37 +83,32 @@ fn straight(a: u32, b: u32) -> bool {
 fn straight_pair(m: u32) -> bool { return straight(countTrailingZeros(m), 31u - countLeadingZeros(m)); }
 
 // The L-FAST decision for edge pixel p (>= 7 pixels from every side).
+// Written without early returns, each loop with its test at the top: a SIMD
+// software rasteriser keeps an exec mask per exit and runs both sides of
+// every `if`; the loops run as often as the busiest lane needs.
 fn is_corner(l: u32, px: i32, py: i32) -> bool {
     let mask = circle_mask(l, px, py);
+    let n = countOneBits(mask);
     if (P.mode == 0u) {
-        // Paper: every circle edge pixel is its own t_i.
-        let n = countOneBits(mask);
-        if (n < 2u) { return false; }
-        if (n == 2u) {
-            let a = countTrailingZeros(mask);
-            let b = 31u - countLeadingZeros(mask);
-            if (b - a == 8u) { return false; } // p on the line of the only two points
-        }
+        // Paper: every circle edge pixel is its own t_i; two opposite points
+        // alone put p on their line. Two supported points make a corner.
+        let opposite = n == 2u && (31u - countLeadingZeros(mask)) - countTrailingZeros(mask) == 8u;
+        var m = select(0u, mask, n >= 2u && !opposite);
         var supported = 0u;
-        var m = mask;
-        while (m != 0u) {
+        while (m != 0u && supported < 2u) {
             let t = countTrailingZeros(m);
             m &= m - 1u;
-            if (supports(l, px, py, t, P.support)) {
-                supported++;
-                if (supported >= 2u) { return true; }
-            }
+            supported += u32(supports(l, px, py, t, P.support));
         }
-        return false;
+        return supported >= 2u;
     }
     // Branch: for_each_branch of the CPU module. No branch for 0 and all-16.
     // The branch middles are distinct circle indices, so a 16-bit mask holds
     // them (bit t = a branch's middle is t) instead of a list.
-    if (mask == 0u || mask == 0xffffu) { return false; }
     var mids = 0u;
     // bit s of `starts` is set where a run begins: s set, s-1 (cyclically) clear
     let prev = ((mask << 1u) | (mask >> 15u)) & 0xffffu;
-    var starts = mask & ~prev;
+    var starts = select(0u, mask & ~prev, mask != 0xffffu);
     let doubled = mask | (mask << 16u);
     while (starts != 0u) {
         let s = countTrailingZeros(starts);
@@ -126,18 +120,24 @@ fn is_corner(l: u32, px: i32, py: i32) -> bool {
     // Fewer than two branches, or exactly two on a straight line, can never
     // make a corner, whatever Step 4 says: skip its reads.
     let nb = countOneBits(mids);
-    if (nb < 2u || (nb == 2u && straight_pair(mids))) { return false; }
+    var m = select(mids, 0u, nb < 2u || (nb == 2u && straight_pair(mids)));
     var ts = 0u;
-    var m = mids;
     while (m != 0u) {
         let t = countTrailingZeros(m);
         m &= m - 1u;
-        if (supports(l, px, py, t, P.support)) { ts |= 1u << t; }
+        ts |= select(0u, 1u << t, supports(l, px, py, t, P.support));
     }
-    let n = countOneBits(ts);
-    if (n < 2u) { return false; }
-    if (n == 2u) { return !straight_pair(ts); }
-    return true;
+    let k = countOneBits(ts);
+    return k > 2u || (k == 2u && !straight_pair(ts));
+}
+
+// Bits 4k .. 4k + 3 of an edge window: the edge rows of packed word g + k of
+// the column (words top ..= last), 0 outside the level.
+fn window_nibble(top: u32, last: u32, l: u32, g: i32, k: i32, h: u32) -> u32 {
+    let i = g + k;
+    let inside = i >= 0 && u32(i) * 4u < h;
+    let word = edges[min(top + u32(max(i, 0)) * lw(l), last)];
+    return select(0u, bits4(pk_rows(word) == vec4<u32>(EDGE)) << (4u * u32(k)), inside);
 }
 
 // Entry `windows`, the pass's first dispatch: a column pass whose invocation
@@ -149,14 +149,21 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
     if (span.y >= span.z) { return; }
     let l = span.w;
     let h = lh(l);
+    // rows r - 8 .. r - 5, r = y0 + 4k: a whole packed word, or none of the
+    // level; the eight loads unconditional (clamped into the level), the
+    // words outside it dropped
+    let top = pk_word(l, span.x, 0u);
+    let last = pk_word(l, span.x, h - 1u);
+    let g = i32(span.y >> 2u) - 2;
     var bits = 0u;
-    for (var k = 0u; k < 8u; k++) {
-        // rows r - 8 .. r - 5, r = y0 + 4k: a whole packed word, or none of the level
-        let r = span.y + 4u * k;
-        if (r >= 8u && r - 8u < h) {
-            bits |= bits4(pk_rows(edges[pk_word(l, span.x, r - 8u)]) == vec4<u32>(EDGE)) << (4u * k);
-        }
-    }
+    bits |= window_nibble(top, last, l, g, 0, h);
+    bits |= window_nibble(top, last, l, g, 1, h);
+    bits |= window_nibble(top, last, l, g, 2, h);
+    bits |= window_nibble(top, last, l, g, 3, h);
+    bits |= window_nibble(top, last, l, g, 4, h);
+    bits |= window_nibble(top, last, l, g, 5, h);
+    bits |= window_nibble(top, last, l, g, 6, h);
+    bits |= window_nibble(top, last, l, g, 7, h);
     edge_bits[window_word(l, span.x, span.y / TILE)] = bits;
 }
 
@@ -189,10 +196,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     var rows = 0u;
     if (span.y < span.z && col) {
         rows = (edge_bits[window_word(l, span.x, span.y / TILE)] >> 8u) & 0xffffu;
-        // (rows past the level's last are 0 in the window)
-        for (var y = span.y; y < span.z; y++) {
-            rows &= ~(u32(y < b || y + b >= h) << (y - span.y));
-        }
+        // only rows b .. h - b - 1 (rows past the level's last are 0 in the
+        // window): rows y0 + r with r in [lo, hi)
+        let lo = u32(clamp(i32(b) - i32(span.y), 0, 16));
+        let hi = u32(clamp(i32(h) - i32(b) - i32(span.y), 0, 16));
+        rows &= select(0u, ((1u << hi) - 1u) & ~((1u << lo) - 1u), hi > lo);
     }
     while (rows != 0u) {
         let r = countTrailingZeros(rows);
