@@ -70,11 +70,37 @@ fn harris_from_sums(ai: i32, bi: i32, ci: i32) -> f32 {
     return e * scale_sq_sq;
 }
 
-fn px(l: u32, x: i32, y: i32) -> i32 {
-    // D is column-packed (common.wgsl pk_word); coordinates clamped as `clamped`
+// Rows y - 4 .. y + 4 (clamped into the level) of column x (clamped) of D,
+// as three vec3 (rows y-4..y-2, y-1..y+1, y+2..y+4). D is column-packed
+// (common.wgsl pk_word): nine clamped rows lie in three consecutive words, so
+// the column costs three loads, not nine.
+struct Col9 {
+    a: vec3<i32>,
+    b: vec3<i32>,
+    c: vec3<i32>,
+}
+
+fn col9(l: u32, x: i32, y: i32) -> Col9 {
     let cx = u32(clamp(x, 0, i32(lw(l)) - 1));
-    let cy = u32(clamp(y, 0, i32(lh(l)) - 1));
-    return i32(pk_byte(denoised[pk_word(l, cx, cy)], cy));
+    let hm = i32(lh(l)) - 1;
+    let top = u32(clamp(y - 4, 0, hm));
+    let base = pk_word(l, cx, top);
+    let last = pk_word(l, cx, u32(hm));
+    let w0 = denoised[base];
+    let w1 = denoised[min(base + lw(l), last)];
+    let w2 = denoised[min(base + 2u * lw(l), last)];
+    let g = top >> 2u;
+    return Col9(
+        vec3(d_row(w0, w1, w2, g, y - 4, hm), d_row(w0, w1, w2, g, y - 3, hm), d_row(w0, w1, w2, g, y - 2, hm)),
+        vec3(d_row(w0, w1, w2, g, y - 1, hm), d_row(w0, w1, w2, g, y, hm), d_row(w0, w1, w2, g, y + 1, hm)),
+        vec3(d_row(w0, w1, w2, g, y + 2, hm), d_row(w0, w1, w2, g, y + 3, hm), d_row(w0, w1, w2, g, y + 4, hm)));
+}
+
+// D at row y (clamped to 0 ..= hm) from the words of groups g, g + 1, g + 2.
+fn d_row(w0: u32, w1: u32, w2: u32, g: u32, y: i32, hm: i32) -> i32 {
+    let yc = u32(clamp(y, 0, hm));
+    let k = (yc >> 2u) - g;
+    return i32(pk_byte(select(select(w0, w1, k >= 1u), w2, k >= 2u), yc));
 }
 
 // (Ix², Iy², IxIy) of the 3x3 Sobel at the centre of the 3x3 a (row above),
@@ -83,14 +109,6 @@ fn sobel_terms(a: vec3<i32>, b0: i32, b2: i32, c: vec3<i32>) -> vec3<i32> {
     let ix = (b2 - b0) * 2 + (a.z - a.x) + (c.z - c.x);
     let iy = (c.y - a.y) * 2 + (c.x - a.x) + (c.z - a.z);
     return vec3(ix * ix, iy * iy, ix * iy);
-}
-
-// Row y's nine pixels x - 4 .. x + 4 of level l, clamped, as three vec3.
-fn row9(l: u32, x: i32, y: i32) -> array<vec3<i32>, 3> {
-    return array<vec3<i32>, 3>(
-        vec3(px(l, x - 4, y), px(l, x - 3, y), px(l, x - 2, y)),
-        vec3(px(l, x - 1, y), px(l, x, y), px(l, x + 1, y)),
-        vec3(px(l, x + 2, y), px(l, x + 3, y), px(l, x + 4, y)));
 }
 
 // The seven Sobel terms of block row b (rows a above and c below), summed.
@@ -118,19 +136,30 @@ fn row_terms(a: array<vec3<i32>, 3>, b: array<vec3<i32>, 3>, c: array<vec3<i32>,
 
 // The integer structure-tensor sums (a, b, c) = (ΣIx², ΣIy², ΣIxIy) over the
 // 7x7 block centred on (x, y), reads clamped, as structure_sums: the 9x9
-// footprint is read a row at a time, three rows kept (sums of exact integers,
-// so the order does not matter).
+// footprint is read a column at a time (col9), and the seven block rows are
+// written out with constant indices (sums of exact integers, so the order
+// does not matter).
 fn structure_sums(l: u32, x: i32, y: i32) -> vec3<i32> {
-    var up = row9(l, x, y - R - 1);
-    var mid = row9(l, x, y - R);
-    var sums = vec3(0);
-    for (var by = -R; by <= R; by++) {
-        let down = row9(l, x, y + by + 1);
-        sums += row_terms(up, mid, down);
-        up = mid;
-        mid = down;
-    }
-    return sums;
+    let c0 = col9(l, x + -4, y);
+    let c1 = col9(l, x + -3, y);
+    let c2 = col9(l, x + -2, y);
+    let c3 = col9(l, x + -1, y);
+    let c4 = col9(l, x + 0, y);
+    let c5 = col9(l, x + 1, y);
+    let c6 = col9(l, x + 2, y);
+    let c7 = col9(l, x + 3, y);
+    let c8 = col9(l, x + 4, y);
+    let r0 = array<vec3<i32>, 3>(vec3(c0.a.x, c1.a.x, c2.a.x), vec3(c3.a.x, c4.a.x, c5.a.x), vec3(c6.a.x, c7.a.x, c8.a.x));
+    let r1 = array<vec3<i32>, 3>(vec3(c0.a.y, c1.a.y, c2.a.y), vec3(c3.a.y, c4.a.y, c5.a.y), vec3(c6.a.y, c7.a.y, c8.a.y));
+    let r2 = array<vec3<i32>, 3>(vec3(c0.a.z, c1.a.z, c2.a.z), vec3(c3.a.z, c4.a.z, c5.a.z), vec3(c6.a.z, c7.a.z, c8.a.z));
+    let r3 = array<vec3<i32>, 3>(vec3(c0.b.x, c1.b.x, c2.b.x), vec3(c3.b.x, c4.b.x, c5.b.x), vec3(c6.b.x, c7.b.x, c8.b.x));
+    let r4 = array<vec3<i32>, 3>(vec3(c0.b.y, c1.b.y, c2.b.y), vec3(c3.b.y, c4.b.y, c5.b.y), vec3(c6.b.y, c7.b.y, c8.b.y));
+    let r5 = array<vec3<i32>, 3>(vec3(c0.b.z, c1.b.z, c2.b.z), vec3(c3.b.z, c4.b.z, c5.b.z), vec3(c6.b.z, c7.b.z, c8.b.z));
+    let r6 = array<vec3<i32>, 3>(vec3(c0.c.x, c1.c.x, c2.c.x), vec3(c3.c.x, c4.c.x, c5.c.x), vec3(c6.c.x, c7.c.x, c8.c.x));
+    let r7 = array<vec3<i32>, 3>(vec3(c0.c.y, c1.c.y, c2.c.y), vec3(c3.c.y, c4.c.y, c5.c.y), vec3(c6.c.y, c7.c.y, c8.c.y));
+    let r8 = array<vec3<i32>, 3>(vec3(c0.c.z, c1.c.z, c2.c.z), vec3(c3.c.z, c4.c.z, c5.c.z), vec3(c6.c.z, c7.c.z, c8.c.z));
+    return row_terms(r0, r1, r2) + row_terms(r1, r2, r3) + row_terms(r2, r3, r4) + row_terms(r3, r4, r5)
+        + row_terms(r4, r5, r6) + row_terms(r5, r6, r7) + row_terms(r6, r7, r8);
 }
 
 // Work-efficient: the column's candidates are listed (list_candidates,
