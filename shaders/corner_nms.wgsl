@@ -32,12 +32,28 @@ fn suppress(l: u32, p: vec2<u32>) {
     let y0 = select(0u, p.y - r, p.y >= r);
     let x1 = min(p.x + r, w - 1u);
     let y1 = min(p.y + r, h - 1u);
-    for (var y = y0; y <= y1; y++) {
-        for (var x = x0; x <= x1; x++) {
-            let j = loff(l) + y * w + x;
-            if (j != i && pk_byte(cand[pk_word(l, x, y)], y) != 0u && beats(bitcast<f32>(resp[j]), vec2(x, y), rp, p)) { return; }
+    // Column by column, a word of `cand` (four rows) at a time: the other
+    // candidates among its rows in the square as bits, then a `while` loop
+    // over those only reads their responses (candidates are sparse). Loops
+    // test at the top and stop once p is beaten: no early return inside (a
+    // SIMD software rasteriser keeps an exec mask per exit).
+    var beaten = false;
+    for (var x = x0; x <= x1 && !beaten; x++) {
+        for (var g = y0 >> 2u; g <= (y1 >> 2u) && !beaten; g++) {
+            let lo = u32(max(i32(y0) - i32(4u * g), 0));
+            let hi = u32(min(i32(y1) - i32(4u * g), 3));
+            var rows = bits4(pk_rows(cand[pk_word(l, x, 4u * g)]) != vec4<u32>(0u))
+                & ((2u << hi) - 1u) & ~((1u << lo) - 1u);
+            // not p itself
+            rows &= ~select(0u, 1u << (p.y - 4u * g), x == p.x && (p.y >> 2u) == g);
+            while (rows != 0u && !beaten) {
+                let y = 4u * g + countTrailingZeros(rows);
+                rows &= rows - 1u;
+                beaten = beats(bitcast<f32>(resp[loff(l) + y * w + x]), vec2(x, y), rp, p);
+            }
         }
     }
+    if (beaten) { return; }
     // A survivor. P.capacity bounds the survivors (docs/algorithm.md), the
     // guard only keeps a broken bound from writing out of the list.
     let slot = atomicAdd(&counters[C_CORNERS], 1u);
