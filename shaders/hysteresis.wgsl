@@ -1,7 +1,7 @@
 // SPEC 7 rule 3: hysteresis. Mirrors src/cpu/hysteresis.rs: a pixel is an
 // edge (255) iff it is STRONG, or WEAK and joined to a STRONG pixel through
 // 8-connected WEAK pixels. `ruled` and `edges` are column-packed (common.wgsl
-// pk_word); labels and flags hold one u32 per pixel.
+// pk_word); labels hold one u32 per pixel, flags one bit.
 //
 // The CPU floods each WEAK component that touches a STRONG pixel. Here the
 // same set comes from connected-component labelling of the active (WEAK or
@@ -18,9 +18,9 @@
 //   merge        union of each active pixel with its active left, up-left,
 //                up and up-right neighbours (the other four see it as theirs),
 //                as few of them as keep the components (see merge)
-//   compress     labels[i] = root of i, and flags[root] = 1 for every STRONG
-//                pixel (`flags` is cleared by the pass's prepare)
-//   final_edges  edges = 255 iff active and flags[labels[i]] == 1
+//   compress     labels[i] = root of i, and bit `root` of flags set for every
+//                STRONG pixel (`flags` is cleared by the pass's prepare)
+//   final_edges  edges = 255 iff active and bit labels[i] of flags is set
 // No host loop and no iteration cap: the result is exact after one pass of
 // each, whatever the length or shape of a contour. Through the complement,
 // atomicMin of a parent is atomicMax of its stored word.
@@ -199,7 +199,8 @@ fn compress_px(i: u32, strong: bool) {
     atomicStore(&labels[i], ~root);
     // A STRONG pixel marks its component (final_edges reads the mark only
     // after this dispatch has ended).
-    if (strong) { atomicOr(&flags[root], 1u); }
+    // (`flags` is a bit per pixel: a 32nd of a u32 plane to clear each frame)
+    if (strong) { atomicOr(&flags[root >> 5u], 1u << (root & 31u)); }
 }
 
 // Bits of the walk's rows (bit r = row y0 + r, rows past `end` clear): which
@@ -240,7 +241,8 @@ fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_i
     while (rows != 0u) {
         let r = countTrailingZeros(rows);
         rows &= rows - 1u;
-        if (atomicLoad(&flags[parent(loff(c.w) + (c.y + r) * lw(c.w) + c.x)]) == 1u) { e |= 1u << r; }
+        let root = parent(loff(c.w) + (c.y + r) * lw(c.w) + c.x);
+        e |= ((atomicLoad(&flags[root >> 5u]) >> (root & 31u)) & 1u) << r;
     }
     // `edges` is column-packed as `ruled`: bit r of e -> 255 at row c.y + r
     for (var y = c.y; y < c.z; y += 4u) {

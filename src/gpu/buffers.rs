@@ -190,7 +190,8 @@ pub struct Buffers {
     pub ruled: wgpu::Buffer,
     /// Union-find labels (hysteresis).
     pub labels: wgpu::Buffer,
-    /// Per root: 1 if its component holds a STRONG pixel (hysteresis).
+    /// Per root, one bit (bit i % 32 of word i / 32 for atlas index i): set
+    /// if its component holds a STRONG pixel (hysteresis).
     pub flags: wgpu::Buffer,
     /// E: 255 = edge, column-packed as `classes`.
     pub edges: wgpu::Buffer,
@@ -349,7 +350,7 @@ impl Buffers {
             classes: buf("classes", allocated.packed * 4),
             ruled: buf("ruled", allocated.packed * 4),
             labels: px("labels"),
-            flags: px("flags"),
+            flags: buf("flags", (layout.total_px as u64).div_ceil(32) * 4),
             edges: buf("edges", allocated.packed * 4),
             edge_bits: buf("edge_bits", allocated.tiles * TILE as u64 * 4),
             cand: buf("cand", allocated.packed * 4),

@@ -67,7 +67,7 @@ impl Pass for HysteresisPass {
 
     fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
         // All zero labels: every pixel a root (the shader stores parents
-        // complemented). `compress` only ever sets flags of roots to 1.
+        // complemented). `compress` only ever sets roots' bits of flags.
         encoder.clear_buffer(&b.labels, 0, None);
         encoder.clear_buffer(&b.flags, 0, None);
     }
