@@ -82,14 +82,22 @@ fn at_or_past(b: vec2<i32>, v: vec2<i32>) -> bool {
     return hb < hv || (hb == hv && b.x * v.y - b.y * v.x >= 0);
 }
 
+// AngleBins::bin_of: how many boundaries m is at or past, mod bins. The
+// boundaries ascend strictly in angle (src/spec/angle.rs tests it for every
+// bin count allowed), so those m is at or past are a prefix: a binary search
+// counts them in log2(bins) + 1 reads instead of a loop over all of them.
 fn bin_of(m: vec2<i32>) -> u32 {
-    if (m.x == 0 && m.y == 0) { return 0u; } // no direction: angle 0
     let n_bins = max(1u, P.orientation_bins);
-    var n = 0u;
-    for (var b = 0u; b < n_bins; b++) {
-        if (at_or_past(angle_bounds[b], m)) { n++; }
+    var lo = 0u;
+    var hi = n_bins;
+    while (lo < hi) {
+        let mid = (lo + hi) >> 1u;
+        let past = at_or_past(angle_bounds[mid], m);
+        lo = select(lo, mid + 1u, past);
+        hi = select(mid, hi, past);
     }
-    return n % n_bins;
+    // no direction: angle 0
+    return select(lo % n_bins, 0u, m.x == 0 && m.y == 0);
 }
 
 // atan2(m01, m10) in degrees, in [0, 360).
@@ -109,25 +117,28 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
     let i = wg.y * 65535u + wg.x;
     // No early return before the barriers (they need uniform control flow):
     // `ok` guards the work instead.
-    var kp0: Kp;
-    var ok = false;
-    if (i < counters[KEYPOINTS] && i < P.capacity) {
-        kp0 = keypoints[i];
-        ok = kp0.level < P.n_levels;
-    }
+    // Every lane reads the three fields it needs, not the whole record (a
+    // SIMD software rasteriser reads each field lane by lane); index clamped,
+    // so the reads are unconditional.
+    let live = i < counters[KEYPOINTS] && i < P.capacity;
+    let ki = select(0u, i, live);
+    let level = keypoints[ki].level;
+    let kx = keypoints[ki].px;
+    let ky = keypoints[ki].py;
+    let ok = live && level < P.n_levels;
     if (lane == 0u) {
         atomicStore(&sum10, 0);
         atomicStore(&sum01, 0);
     }
     workgroupBarrier();
     if (ok) {
-        let part = moments_part(kp0.level, i32(kp0.px), i32(kp0.py), lane);
+        let part = moments_part(level, i32(kx), i32(ky), lane);
         atomicAdd(&sum10, part.x);
         atomicAdd(&sum01, part.y);
     }
     workgroupBarrier();
     if (!ok || lane != 0u) { return; }
-    var kp = kp0;
+    var kp = keypoints[i];
     let m = vec2(atomicLoad(&sum10), atomicLoad(&sum01));
     kp.m10 = m.x;
     kp.m01 = m.y;

@@ -125,6 +125,19 @@ impl AngleBins {
 mod tests {
     use super::*;
 
+    /// shaders/orientation.wgsl counts the boundaries a direction is at or
+    /// past by binary search, which equals the count only if they ascend
+    /// strictly in angle: check it for every bin count the config allows.
+    #[test]
+    fn bounds_ascend_strictly_for_every_bin_count() {
+        for bins in 1..=360u32 {
+            let b = AngleBins::new(bins);
+            for w in b.bounds().windows(2) {
+                assert!(at_or_past(w[0], w[1]) && !at_or_past(w[1], w[0]), "bins {bins}: {:?}", w);
+            }
+        }
+    }
+
     #[test]
     fn umax_matches_opencv() {
         assert_eq!(compute_umax(15), UMAX.to_vec());
