@@ -160,6 +160,13 @@ fn pk_from_bits(q: u32) -> u32 { return (q & 1u) | ((q & 2u) << 7u) | ((q & 4u) 
 // `end`: the last of its four rows, or the walk's last row.
 fn pk_complete(y: u32, end: u32) -> bool { return (y & 3u) == 3u || y + 1u == end; }
 
+// Tile-column planes (lfast's `edge_bits`, rules' `ruled`): one word per
+// column of every tile, in tile-list order (FrameLayout::tile_range,
+// gpu::layout::pack_tile_bits): the word of column x of tile row ty of level l.
+fn tile_word(l: u32, x: u32, ty: u32) -> u32 {
+    return (P.tiles[l].x + ty * P.tiles[l].y + x / TILE) * TILE + x % TILE;
+}
+
 // Work lists of column passes (lfast, response, corner_nms): an entry names
 // the pixel `row` rows below the top of lane `lane`'s column.
 fn list_entry(lane: u32, row: u32) -> u32 { return (lane << 4u) | row; }

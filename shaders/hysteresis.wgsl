@@ -1,7 +1,9 @@
 // SPEC 7 rule 3: hysteresis. Mirrors src/cpu/hysteresis.rs: a pixel is an
 // edge (255) iff it is STRONG, or WEAK and joined to a STRONG pixel through
-// 8-connected WEAK pixels. `ruled` and `edges` are column-packed (common.wgsl
-// pk_word); labels hold one u32 per pixel, flags one bit.
+// 8-connected WEAK pixels. `ruled` holds a word per column of every tile
+// (rules.wgsl: bit r active, bit 16 + r STRONG, for row 16 ty + r); `edges` is
+// column-packed (common.wgsl pk_word); labels hold one u32 per pixel, flags
+// one bit.
 //
 // The CPU floods each WEAK component that touches a STRONG pixel. Here the
 // same set comes from connected-component labelling of the active (WEAK or
@@ -55,9 +57,6 @@
 @group(0) @binding(3) var<storage, read_write> flags: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> edges: array<u32>;
 
-// Classes of src/cpu/classify.rs (after rules only NONE, WEAK and STRONG remain).
-const WEAK: u32 = 2u;
-const STRONG: u32 = 4u;
 const EDGE: u32 = 255u;
 
 // The parent of a root that has not been compressed (labels as cleared).
@@ -108,20 +107,13 @@ fn link(i: u32, t: u32) {
     if (old != NONE && old != t) { unite(old, t); }
 }
 
-// The packed words of columns x-1, x, x+1 holding row y of level l (the
-// column's own word in .y); a column outside the level reads as 0 (class
-// NONE in every row: never active). rules.wgsl's words3, over `ruled` (a
-// shader function cannot take a storage buffer as an argument).
-fn words3(l: u32, x: u32, y: u32) -> vec3<u32> {
-    let k = pk_word(l, x, y);
-    var r = vec3<u32>(0u, ruled[k], 0u);
-    if (x > 0u) { r.x = ruled[k - 1u]; }
-    if (x + 1u < lw(l)) { r.z = ruled[k + 1u]; }
-    return r;
-}
-
-fn active3(c: vec3<u32>) -> vec3<bool> {
-    return (c == vec3<u32>(WEAK)) | (c == vec3<u32>(STRONG));
+// The `ruled` words of columns x-1, x, x+1 of tile row ty of level l (the
+// column's own in .y); a column outside the level reads as 0 (never active).
+// Three unconditional loads (columns clamped), then zeroed outside.
+fn words3(l: u32, x: u32, ty: u32) -> vec3<u32> {
+    let left = ruled[tile_word(l, x - select(0u, 1u, x > 0u), ty)];
+    let right = ruled[tile_word(l, min(x + 1u, lw(l) - 1u), ty)];
+    return vec3<u32>(select(0u, left, x > 0u), ruled[tile_word(l, x, ty)], select(0u, right, x + 1u < lw(l)));
 }
 
 // merge: active pixel i at (x, y) is united with its active neighbours of
@@ -137,10 +129,10 @@ fn active3(c: vec3<u32>) -> vec3<bool> {
 //   active: UR is no neighbour of L or UL.
 // Every union made joins two 8-neighbours and every 8-neighbour pair ends up
 // joined, so the trees are the 8-connected components, as with all four unions.
-// Each invocation walks its column with the words of columns x-1, x, x+1 in
-// registers (three reads per four rows, in an outer loop over the words, not
-// under `if`: see median.wgsl) and notes each row's unions as bits;
-// then it makes them in a loop over the rows that have any. A SIMD software
+// Each invocation reads the `ruled` words of columns x-1, x, x+1 of its tile
+// and of the tile above (six loads, unconditional), takes every row's
+// decision at once in bit operations, and makes the unions in a loop over
+// the rows that have any. A SIMD software
 // rasteriser runs a branch's body for every lane of the group (masked), so the
 // unions in the walk cost 16 times per column; compacted, they cost as many
 // times as the busiest lane of the group has pixels to join.
@@ -150,45 +142,38 @@ fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     if (c.y == c.z) { return; }
     let l = c.w;
     let w = lw(l);
-    // classes of the row above at x-1, x, x+1 (none above row 0)
-    var up = vec3<bool>(false);
-    if (c.y > 0u) { up = active3(pk_byte3(words3(l, c.x, c.y - 1u), c.y - 1u)); }
-    // per row r of the walk: bit r of `rows` if it has a union to make;
-    // bits 2r, 2r+1 of `first`: its first union (0 none, 1 U, 2 L, 3 UL);
-    // bit r of `ur`: a second union, with UR
-    var rows = 0u;
-    var first = 0u;
-    var ur = 0u;
-    // an outer loop over the words (four rows), an inner one over the rows
-    // (rows past the level's last are NONE in their word: never active)
-    for (var y = c.y; y < c.z; y += 4u) {
-        let words = words3(l, c.x, y);
-        for (var k = 0u; k < 4u; k++) {
-            let cur = active3(pk_byte3(words, y + k));
-            let r = y + k - c.y;
-            var code = 0u;
-            var second = false;
-            if (up.y) {
-                code = 1u;
-            } else {
-                code = select(select(0u, 3u, up.x), 2u, cur.x);
-                second = up.z;
-            }
-            if (cur.y && (code != 0u || second)) {
-                rows |= 1u << r;
-                first |= code << (2u * r);
-                ur |= u32(second) << r;
-            }
-            up = cur;
-        }
-    }
+    let ty = c.y / TILE;
+    // the walk's active rows of columns x-1, x, x+1 (bit r = row c.y + r;
+    // rows past the level's last are clear), and the row above it (bit 15 of
+    // the tile row above; none above row 0)
+    let cols = words3(l, c.x, ty) & vec3<u32>(0xffffu);
+    let above = select(vec3<u32>(0u), (words3(l, c.x, max(ty, 1u) - 1u) >> vec3<u32>(15u)) & vec3<u32>(1u), ty > 0u);
+    // every row's neighbours at once, as bits: up-left, up, up-right
+    let ups = ((cols << vec3<u32>(1u)) | above) & vec3<u32>(0xffffu);
+    let act = cols.y;
+    // the decision tree, row by row in parallel: U alone when active; else L,
+    // else UL, and UR as a second union
+    let by_u = act & ups.y;
+    let by_l = act & ~ups.y & cols.x;
+    let by_ul = act & ~ups.y & ~cols.x & ups.x;
+    let ur = act & ~ups.y & ups.z;
+    var rows = by_u | by_l | by_ul | ur;
+    // the first rows of the walk's vertical runs of active pixels
+    let tops = act & ~(act << 1u);
     while (rows != 0u) {
         let r = countTrailingZeros(rows);
         rows &= rows - 1u;
         let i = loff(l) + (c.y + r) * w + c.x;
-        let code = (first >> (2u * r)) & 3u;
-        if (code != 0u) { link(i, select(select(i - w - 1u, i - 1u, code == 2u), i - w, code == 1u)); }
-        if (((ur >> r) & 1u) != 0u) { link(i, i - w + 1u); }
+        let bit = 1u << r;
+        // U active: the top of the vertical run in this walk holding it (the
+        // same component, one link instead of a chain down the run), or U
+        // itself when the run comes from the walk above
+        let r0 = firstLeadingBit(tops & ((2u << r) - 1u));
+        let up_link = select(i - w, i - (r - r0) * w, r0 < r);
+        if (((by_u | by_l | by_ul) & bit) != 0u) {
+            link(i, select(select(i - w - 1u, i - 1u, (by_l & bit) != 0u), up_link, (by_u & bit) != 0u));
+        }
+        if ((ur & bit) != 0u) { link(i, i - w + 1u); }
     }
 }
 
@@ -203,46 +188,52 @@ fn compress_px(i: u32, strong: bool) {
     if (strong) { atomicOr(&flags[root >> 5u], 1u << (root & 31u)); }
 }
 
-// Bits of the walk's rows (bit r = row y0 + r, rows past `end` clear): which
-// are active (.x) and which STRONG (.y), from the column's words of `ruled`.
-fn active_rows(l: u32, x: u32, y0: u32, end: u32) -> vec2<u32> {
-    var m = vec2<u32>(0u);
-    for (var y = y0; y < end; y += 4u) {
-        let k = pk_rows(ruled[pk_word(l, x, y)]);
-        let strong = bits4(k == vec4<u32>(STRONG));
-        m |= vec2<u32>(bits4(k == vec4<u32>(WEAK)) | strong, strong) << vec2<u32>(y - y0);
-    }
-    // rows past the level's last are 0 in their word (NONE), never active
-    return m;
+// Bits of the walk's rows (bit r = row y0 + r; rows past the level's last
+// clear): which are active (.x) and which STRONG (.y), its `ruled` word.
+fn active_rows(l: u32, x: u32, y0: u32) -> vec2<u32> {
+    let word = ruled[tile_word(l, x, y0 / TILE)];
+    return vec2<u32>(word & 0xffffu, word >> 16u);
 }
 
-// Compacted as merge: a loop over the column's active pixels only.
+// The rows of the vertical run of active rows `act` that starts at row r0.
+fn run_mask(act: u32, r0: u32) -> u32 {
+    return ((1u << countTrailingZeros(~(act >> r0))) - 1u) << r0;
+}
+
+// Compacted as merge, and per vertical run of the walk rather than per pixel:
+// merge linked each pixel of a run below its top to the top, so the run is
+// one component; its top's root is every pixel's. A loop over the runs'
+// tops: the top's label becomes its root, and the root is marked when any
+// pixel of the run is STRONG. (The other pixels keep their link to the top,
+// one step from the root: final_edges reads the tops only.)
 @compute @workgroup_size(64, 1, 1)
 fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
     if (c.y == c.z) { return; }
-    let m = active_rows(c.w, c.x, c.y, c.z);
-    var rows = m.x;
-    while (rows != 0u) {
-        let r = countTrailingZeros(rows);
-        rows &= rows - 1u;
-        compress_px(loff(c.w) + (c.y + r) * lw(c.w) + c.x, ((m.y >> r) & 1u) != 0u);
+    let m = active_rows(c.w, c.x, c.y);
+    var tops = m.x & ~(m.x << 1u);
+    while (tops != 0u) {
+        let r = countTrailingZeros(tops);
+        tops &= tops - 1u;
+        compress_px(loff(c.w) + (c.y + r) * lw(c.w) + c.x, (m.y & run_mask(m.x, r)) != 0u);
     }
 }
 
-// Compacted as merge: the flag of each active pixel's root (after compress
-// its parent), then the column's packed words of `edges`.
+// Compacted as compress, per run: the flag of each run top's root (after
+// compress its parent) for the whole run, then the column's packed words of
+// `edges`.
 @compute @workgroup_size(64, 1, 1)
 fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
     if (c.y == c.z) { return; }
-    var rows = active_rows(c.w, c.x, c.y, c.z).x;
+    let act = active_rows(c.w, c.x, c.y).x;
+    var tops = act & ~(act << 1u);
     var e = 0u;
-    while (rows != 0u) {
-        let r = countTrailingZeros(rows);
-        rows &= rows - 1u;
+    while (tops != 0u) {
+        let r = countTrailingZeros(tops);
+        tops &= tops - 1u;
         let root = parent(loff(c.w) + (c.y + r) * lw(c.w) + c.x);
-        e |= ((atomicLoad(&flags[root >> 5u]) >> (root & 31u)) & 1u) << r;
+        e |= select(0u, run_mask(act, r), ((atomicLoad(&flags[root >> 5u]) >> (root & 31u)) & 1u) != 0u);
     }
     // `edges` is column-packed as `ruled`: bit r of e -> 255 at row c.y + r
     for (var y = c.y; y < c.z; y += 4u) {

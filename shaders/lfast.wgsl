@@ -24,19 +24,17 @@ fn circle_dx(t: u32) -> i32 {
 }
 fn circle_dy(t: u32) -> i32 { return circle_dx((t + 12u) & 15u); }
 
-// Edge windows (entry `windows`): one word per column of every tile, bit j =
-// row 16 ty - 8 + j of that column (1 = edge; rows outside the level 0), for
-// the tile row ty: every pixel the test of a pixel of that tile row reads (up
-// to 7 rows away) is in its column's word, so a column costs one load.
-fn window_word(l: u32, x: u32, ty: u32) -> u32 {
-    return (P.tiles[l].x + ty * P.tiles[l].y + x / TILE) * TILE + x % TILE;
-}
+// Edge windows (entry `windows`): one word per column of every tile
+// (common.wgsl tile_word), bit j = row 16 ty - 8 + j of that column (1 =
+// edge; rows outside the level 0), for the tile row ty: every pixel the test
+// of a pixel of that tile row reads (up to 7 rows away) is in its column's
+// word, so a column costs one load.
 
 // Rows row .. row + n - 1 of column x (bit j = row row + j), read from the
 // window of tile row ty: for a pixel of that tile row, every row its test
 // reads (up to 7 away) lies in the window.
 fn window_rows(l: u32, x: i32, ty: u32, row: i32, n: u32) -> u32 {
-    return (edge_bits[window_word(l, u32(x), ty)] >> u32(row - i32(ty * TILE) + 8)) & ((1u << n) - 1u);
+    return (edge_bits[tile_word(l, u32(x), ty)] >> u32(row - i32(ty * TILE) + 8)) & ((1u << n) - 1u);
 }
 
 // Step 4: does circle point t support the corner at p? q = 2t - p supports it
@@ -164,7 +162,7 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
     bits |= window_nibble(top, last, l, g, 5, h);
     bits |= window_nibble(top, last, l, g, 6, h);
     bits |= window_nibble(top, last, l, g, 7, h);
-    edge_bits[window_word(l, span.x, span.y / TILE)] = bits;
+    edge_bits[tile_word(l, span.x, span.y / TILE)] = bits;
 }
 
 // Work-efficient: a column pass (tile_column) that lists its four tiles'
@@ -195,7 +193,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     // would run every row, masked, on a SIMD software rasteriser)
     var rows = 0u;
     if (span.y < span.z && col) {
-        rows = (edge_bits[window_word(l, span.x, span.y / TILE)] >> 8u) & 0xffffu;
+        rows = (edge_bits[tile_word(l, span.x, span.y / TILE)] >> 8u) & 0xffffu;
         // only rows b .. h - b - 1 (rows past the level's last are 0 in the
         // window): rows y0 + r with r in [lo, hi)
         let lo = u32(clamp(i32(b) - i32(span.y), 0, 16));

@@ -1,6 +1,9 @@
 // SPEC 7 rules 1 and 2: isolated-edge suppression (paper Algorithm 3).
-// Mirrors src/cpu/rules.rs. `classes` (SPEC 6) -> `ruled`, both column-packed
-// (common.wgsl pk_word), a column pass, all
+// Mirrors src/cpu/rules.rs. `classes` (SPEC 6, column-packed, common.wgsl
+// pk_word) -> `ruled`, in which only NONE, WEAK and STRONG remain, as bits: one
+// word per column of every tile (common.wgsl tile_word), bit r = row 16 ty + r
+// is active (WEAK or STRONG), bit 16 + r is STRONG (gpu::layout::pack_ruled).
+// Hysteresis reads them so, a word per column walk. A column pass, all
 // levels in one dispatch (over the tile list). Both rules read the classes
 // of SPEC 6 only, so the result does not depend on the order of invocations.
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/rules.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -44,16 +47,21 @@ fn rule_at(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>) -> u32 {
     return select(select(b.y, ww, b.y == WEAK_WEAK), ws, b.y == WEAK_STRONG);
 }
 
-// Row yy's ruled class in its place in the word (window rows a, b, c); 0
-// (NONE) past the walk's end.
-fn ruled_row(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>, yy: i32, end: i32) -> u32 {
-    return select(0u, pk_place(rule_at(a, b, c), u32(yy)), yy < end);
+// Row yy's ruled class as its bits of the column's word (window rows a, b,
+// c; row r = yy - y0 of the walk): bit r if active, bit 16 + r if STRONG; none
+// past the walk's end.
+fn ruled_bits(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>, yy: i32, y0: i32, end: i32) -> u32 {
+    let k = rule_at(a, b, c);
+    let r = u32(yy - y0);
+    let v = select(0u, 1u << r, k != NONE) | select(0u, 1u << (16u + r), k == STRONG);
+    return select(0u, v, yy < end);
 }
 
 // A column pass (tile_column): the 3x3 window walks down in registers. An
 // outer loop over the column's words (four rows) reads the next group's three
-// words and writes one word of `ruled`, unconditionally; the four rows are
-// written out (`ruled_row`: a loop costs a SIMD software rasteriser its masks) (see median.wgsl for why not under `if`).
+// words unconditionally; the four rows are written out (`ruled_bits`: a loop
+// costs a SIMD software rasteriser its masks); the walk's word of `ruled` is
+// written once at the end (see median.wgsl for why not under `if`).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
@@ -65,18 +73,19 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     var a = pk_byte3(words3(l, x, y0 - 1), u32(y0 - 1));
     var cur = words3(l, x, y0);
     var b = pk_byte3(cur, u32(y0));
-    for (var y = y0; y < i32(span.z); y += 4) {
+    var bits = 0u;
+    for (var y = y0; y < end; y += 4) {
         // rows y + 4 .. y + 7: row y + 4 is the last group row's `c`
         let nxt = words3(l, x, y + 4);
         let c0 = pk_byte3(cur, u32(y + 1));
         let c1 = pk_byte3(cur, u32(y + 2));
         let c2 = pk_byte3(cur, u32(y + 3));
         let c3 = pk_byte3(nxt, u32(y + 4));
-        let word = ruled_row(a, b, c0, y, end) | ruled_row(b, c0, c1, y + 1, end)
-            | ruled_row(c0, c1, c2, y + 2, end) | ruled_row(c1, c2, c3, y + 3, end);
+        bits |= ruled_bits(a, b, c0, y, y0, end) | ruled_bits(b, c0, c1, y + 1, y0, end)
+            | ruled_bits(c0, c1, c2, y + 2, y0, end) | ruled_bits(c1, c2, c3, y + 3, y0, end);
         a = c2;
         b = c3;
-        ruled[pk_word(l, x, u32(y))] = word;
         cur = nxt;
     }
+    ruled[tile_word(l, x, span.y / TILE)] = bits;
 }

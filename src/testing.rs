@@ -40,7 +40,7 @@ pub fn upload_plane<T: Copy + Into<u32>>(ctx: &GpuContext, b: &Buffers, buf: &wg
     upload_level(ctx, b, buf, l, &v);
 }
 
-/// Writes an 8-bit plane into level `l` of a column-packed buffer (`classes`, `ruled`).
+/// Writes an 8-bit plane into level `l` of a column-packed buffer (`classes`, `edges`).
 pub fn upload_packed(ctx: &GpuContext, b: &Buffers, buf: &wgpu::Buffer, l: usize, p: &Plane<u8>) {
     let r = b.layout.packed_range(l);
     let words = crate::gpu::layout::pack_level(p.width, p.height, &p.data);
@@ -48,6 +48,28 @@ pub fn upload_packed(ctx: &GpuContext, b: &Buffers, buf: &wgpu::Buffer, l: usize
     if !words.is_empty() {
         ctx.queue.write_buffer(buf, r.start as u64 * 4, bytemuck::cast_slice(&words));
     }
+}
+
+/// Writes SPEC 7's ruled classes (NONE, WEAK, STRONG) into level `l` of the
+/// `ruled` plane ([`pack_ruled`](crate::gpu::layout::pack_ruled)).
+pub fn upload_ruled(ctx: &GpuContext, b: &Buffers, l: usize, p: &Plane<u8>) {
+    let r = b.layout.tile_range(l);
+    let words = crate::gpu::layout::pack_ruled(p.width, p.height, &p.data);
+    assert_eq!(words.len(), r.len(), "level {l} size");
+    if !words.is_empty() {
+        ctx.queue.write_buffer(&b.ruled, r.start as u64 * 4, bytemuck::cast_slice(&words));
+    }
+}
+
+/// Level `l` of the `ruled` plane as classes (0, 2, 4), one u32 per pixel, row-major.
+pub fn download_ruled(ctx: &GpuContext, b: &Buffers, l: usize) -> Result<Vec<u32>> {
+    let r = b.layout.tile_range(l);
+    if r.is_empty() {
+        return Ok(Vec::new());
+    }
+    let bytes = ctx.read_range(&b.ruled, r.start as u64 * 4, r.len() as u64 * 4)?;
+    let (w, h) = b.layout.sizes[l];
+    Ok(crate::gpu::layout::unpack_ruled(w, h, bytemuck::cast_slice(&bytes)).into_iter().map(u32::from).collect())
 }
 
 /// Level `l` of a column-packed buffer, unpacked: one u32 per pixel, row-major

@@ -126,7 +126,7 @@ fn check_hysteresis(ctx: &GpuContext, pass: &HysteresisPass, b: &Buffers, planes
     poison(ctx, &b.flags, 1);
     poison(ctx, &b.edges, 7);
     for (l, p) in planes.iter().enumerate() {
-        t::upload_packed(ctx, b, &b.ruled, l, p);
+        t::upload_ruled(ctx, b, l, p);
     }
     t::run(ctx, pass, b).unwrap();
     for (l, p) in planes.iter().enumerate() {
@@ -298,7 +298,7 @@ fn rules_literal_case() {
         WEAK, 0, WEAK, WEAK, WEAK, 0,
     ];
     assert_eq!(rules(&c).data, want);
-    assert_eq!(t::download_packed(&ctx, &b, &b.ruled, 0).unwrap(), want.iter().map(|&v| v as u32).collect::<Vec<_>>());
+    assert_eq!(t::download_ruled(&ctx, &b, 0).unwrap(), want.iter().map(|&v| v as u32).collect::<Vec<_>>());
 }
 
 #[test]
@@ -316,7 +316,7 @@ fn rules_match_cpu_on_random_classes() {
         }
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in planes.iter().enumerate() {
-            assert_eq!(t::download_packed(&ctx, &b, &b.ruled, l).unwrap(), to_u32(&rules(p)), "{w}x{h} level {l}");
+            assert_eq!(t::download_ruled(&ctx, &b, l).unwrap(), to_u32(&rules(p)), "{w}x{h} level {l}");
         }
     }
 }
@@ -338,7 +338,7 @@ fn rules_and_hysteresis_match_cpu_on_real_images() {
         }
         t::run(&ctx, &rp, &b).unwrap();
         for (l, em) in ems.iter().enumerate() {
-            assert_eq!(t::download_packed(&ctx, &b, &b.ruled, l).unwrap(), to_u32(&em.ruled), "{name} rules level {l}");
+            assert_eq!(t::download_ruled(&ctx, &b, l).unwrap(), to_u32(&em.ruled), "{name} rules level {l}");
         }
         let ruled: Vec<Plane<u8>> = ems.iter().map(|em| em.ruled.clone()).collect();
         check_hysteresis(&ctx, &hp, &b, &ruled, &name);

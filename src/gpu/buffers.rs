@@ -186,7 +186,9 @@ pub struct Buffers {
     /// SPEC 6 classes, column-packed (four rows of a column per word, see
     /// [`FrameLayout::packed_offsets`](super::FrameLayout::packed_offsets)).
     pub classes: wgpu::Buffer,
-    /// Classes after rules 1 and 2, column-packed as `classes`.
+    /// Classes after rules 1 and 2 (only NONE, WEAK, STRONG remain) as bits:
+    /// one word per column of every tile, bit r active and bit 16 + r STRONG
+    /// for row 16 ty + r ([`pack_ruled`](super::layout::pack_ruled)).
     pub ruled: wgpu::Buffer,
     /// Union-find labels (hysteresis).
     pub labels: wgpu::Buffer,
@@ -196,7 +198,7 @@ pub struct Buffers {
     /// E: 255 = edge, column-packed as `classes`.
     pub edges: wgpu::Buffer,
     /// E as bits for the L-FAST test: per column of each tile, its 16 rows
-    /// and 8 more either side (shaders/lfast.wgsl, `window_word`).
+    /// and 8 more either side (shaders/lfast.wgsl; common.wgsl `tile_word`).
     pub edge_bits: wgpu::Buffer,
     /// L-FAST candidates (0/1), column-packed as `classes`.
     pub cand: wgpu::Buffer,
@@ -348,7 +350,7 @@ impl Buffers {
             windows: buf("windows", 16 * allocated.windows),
             window_hist: buf("window_hist", window_hist_bytes),
             classes: buf("classes", allocated.packed * 4),
-            ruled: buf("ruled", allocated.packed * 4),
+            ruled: buf("ruled", allocated.tiles * TILE as u64 * 4),
             labels: px("labels"),
             flags: buf("flags", (layout.total_px as u64).div_ceil(32) * 4),
             edges: buf("edges", allocated.packed * 4),

@@ -262,6 +262,14 @@ impl FrameLayout {
         o..o + (w * h) as usize
     }
 
+    /// Range of level `l` in a tile-column plane (`ruled`, `edge_bits`: one
+    /// word per column of every tile, tiles in tile-list order), in words.
+    pub fn tile_range(&self, l: usize) -> std::ops::Range<usize> {
+        let t = self.params.tiles[l];
+        let o = t[0] as usize * TILE as usize;
+        o..o + (t[1] * t[2] * TILE) as usize
+    }
+
     /// Range of level `l` in a column-packed plane, in words.
     pub fn packed_range(&self, l: usize) -> std::ops::Range<usize> {
         let (w, h) = self.sizes[l];
@@ -299,6 +307,54 @@ pub fn pack_level(w: u32, h: u32, v: &[u8]) -> Vec<u32> {
         }
     }
     words
+}
+
+/// SPEC 7's ruled classes of a `w x h` level (NONE 0, WEAK 2, STRONG 4, in
+/// row-major order) as the GPU's `ruled` plane holds them
+/// (shaders/rules.wgsl): per 16x16 tile in row-major order, one word per
+/// column, bit r = row 16 ty + r is active (WEAK or STRONG), bit 16 + r is
+/// STRONG; columns and rows past the level clear.
+///
+/// ```
+/// use lfast::gpu::layout::{pack_ruled, unpack_ruled};
+/// // 17 x 17: four tiles; WEAK at (0, 1), STRONG at (16, 16)
+/// let mut v = vec![0u8; 17 * 17];
+/// v[17] = 2;
+/// v[16 * 17 + 16] = 4;
+/// let words = pack_ruled(17, 17, &v);
+/// assert_eq!(words.len(), 4 * 16);
+/// assert_eq!(words[0], 1 << 1); // tile (0, 0), column 0: row 1 active
+/// assert_eq!(words[3 * 16], 1 | (1 << 16)); // tile (1, 1), column 16: row 16 active and STRONG
+/// assert_eq!(words.iter().filter(|&&w| w != 0).count(), 2);
+/// assert_eq!(unpack_ruled(17, 17, &words), v);
+/// ```
+pub fn pack_ruled(w: u32, h: u32, v: &[u8]) -> Vec<u32> {
+    let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+    let mut words = vec![0u32; (tx * ty * TILE) as usize];
+    for (i, &c) in v.iter().enumerate().take((w * h) as usize) {
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        let k = (((y / TILE) * tx + x / TILE) * TILE + x % TILE) as usize;
+        let r = y % TILE;
+        words[k] |= (u32::from(c != 0) << r) | (u32::from(c == 4) << (16 + r));
+    }
+    words
+}
+
+/// The inverse of [`pack_ruled`]: `w * h` classes (0, 2 or 4) in row-major order.
+pub fn unpack_ruled(w: u32, h: u32, words: &[u32]) -> Vec<u8> {
+    let tx = w.div_ceil(TILE);
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let word = words[(((y / TILE) * tx + x / TILE) * TILE + x % TILE) as usize];
+            let r = y % TILE;
+            match ((word >> r) & 1, (word >> (16 + r)) & 1) {
+                (0, _) => 0,
+                (_, 0) => 2,
+                _ => 4,
+            }
+        })
+        .collect()
 }
 
 /// The inverse of [`pack_level`]: `w * h` values in row-major order.

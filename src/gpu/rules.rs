@@ -1,5 +1,6 @@
 //! SPEC 7 rules 1 and 2 on the GPU: shaders/rules.wgsl, mirroring
-//! src/cpu/rules.rs. `classes` -> `ruled` (NONE, WEAK, STRONG), all levels in
+//! src/cpu/rules.rs. `classes` -> `ruled` (NONE, WEAK, STRONG as bits, see
+//! `layout::pack_ruled`), all levels in
 //! one dispatch.
 
 use super::kernel::{Binding, PARAMS, Slot, b};
