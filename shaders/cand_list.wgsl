@@ -1,29 +1,59 @@
-// The work list of the candidate passes, response.wgsl and corner_nms.wgsl:
-// src/gpu/response.rs and src/gpu/corner_nms.rs append this file to their
-// shader, which declares `cand`. One definition, so the two cannot drift.
-//
-// A column pass's invocation lists its column's candidates in `todo`
-// (workgroup memory); after one barrier the workgroup's invocations take the
-// list side by side, so the per-candidate work runs in as few SIMD lanes /
-// warps as there are candidates. Entries: list_entry (common.wgsl); their
-// order is unspecified (each is processed on its own).
+// The candidate list (between SPEC 8 and SPEC 9): the atlas index of every
+// L-FAST candidate, appended to `cand_list` in no particular order, counted
+// in counters[CANDS], and the indirect dispatch args over it (64 candidates
+// per workgroup). response.wgsl and corner_nms.wgsl run over the list by
+// indirect dispatch, so neither scans the levels' pixels: one dense scan for
+// both, here.
+// Entries: `main`, a column pass (tile_column) over the tile list, all levels
+// in one dispatch; then `args`, one invocation.
+// Tests: tests/gpu_keypoints.rs (response and corner NMS alone run after it);
+// tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
-var<workgroup> todo: array<u32, 1024>;
-// zero at the start of the workgroup (WGSL zero-initialises workgroup memory)
-var<workgroup> todo_n: atomic<u32>;
+@group(0) @binding(1) var<storage, read> cand: array<u32>;
+@group(0) @binding(2) var<storage, read_write> cand_list: array<u32>;
+@group(0) @binding(3) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> indirect: array<u32>;
 
-// Appends the candidates of the column span `span` (column_span) of lane
-// `lane`: its rows as bits first (`cand` is column-packed: a word per four
-// rows), then a loop over the set bits only (an if-body in the walk would run
-// every row, masked, on a SIMD software rasteriser).
-fn list_candidates(span: vec4<u32>, lane: u32) {
-    var rows = 0u;
-    for (var y = span.y; y < span.z; y += 4u) {
-        rows |= bits4(pk_rows(cand[pk_word(span.w, span.x, y)]) != vec4<u32>(0u)) << (y - span.y);
-    }
+// counter::CANDS in src/gpu/buffers.rs.
+const C_CANDS: u32 = 3u;
+// indirect::CANDS / 4 in src/gpu/buffers.rs.
+const I_CANDS: u32 = 16u;
+// Workgroups per dimension of an indirect dispatch.
+const MAX_GROUPS: u32 = 65535u;
+
+// Appends the column's candidates: its rows as bits first (`cand` is
+// column-packed: a word per four rows, read unconditionally), then a loop
+// over the set bits only (an if-body in the walk would run every row, masked,
+// on a SIMD software rasteriser).
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let span = column_span(wg, li);
+    if (span.y == span.z) { return; }
+    let l = span.w;
+    let last = pk_word(l, span.x, lh(l) - 1u);
+    let k0 = cand[pk_word(l, span.x, span.y)];
+    let k1 = cand[min(pk_word(l, span.x, span.y + 4u), last)];
+    let k2 = cand[min(pk_word(l, span.x, span.y + 8u), last)];
+    let k3 = cand[min(pk_word(l, span.x, span.y + 12u), last)];
+    let zero = vec4<u32>(0u);
+    var rows = bits4(pk_rows(k0) != zero) | (bits4(pk_rows(k1) != zero) << 4u)
+        | (bits4(pk_rows(k2) != zero) << 8u) | (bits4(pk_rows(k3) != zero) << 12u);
+    // rows past the walk's end (a clamped word read again)
+    rows &= (1u << (span.z - span.y)) - 1u;
+    let base = loff(l) + span.y * lw(l) + span.x;
     while (rows != 0u) {
         let r = countTrailingZeros(rows);
         rows &= rows - 1u;
-        todo[atomicAdd(&todo_n, 1u)] = list_entry(lane, r);
+        cand_list[atomicAdd(&counters[C_CANDS], 1u)] = base + r * lw(l);
     }
+}
+
+// The indirect args over the list: ceil(n / 64) workgroups as (x, y, 1),
+// x <= 65535.
+@compute @workgroup_size(1, 1, 1)
+fn args() {
+    let groups = (atomicLoad(&counters[C_CANDS]) + 63u) / 64u;
+    indirect[I_CANDS] = min(groups, MAX_GROUPS);
+    indirect[I_CANDS + 1u] = (groups + MAX_GROUPS - 1u) / MAX_GROUPS;
+    indirect[I_CANDS + 2u] = 1u;
 }

@@ -167,7 +167,33 @@ fn tile_word(l: u32, x: u32, ty: u32) -> u32 {
     return (P.tiles[l].x + ty * P.tiles[l].y + x / TILE) * TILE + x % TILE;
 }
 
-// Work lists of column passes (lfast, response, corner_nms): an entry names
+// (x, y, level) of atlas index i (a pixel of some level): the level by
+// selects on the levels' offsets (a loop only past 8, as tile_origin), the
+// row by udiv (exact: the row is below 2^14 and w > (w h) / 2^23).
+fn atlas_pixel(i: u32) -> vec3<u32> {
+    var l = 0u;
+    l = select(l, 1u, 1u < P.n_levels && i >= P.levels[1].z);
+    l = select(l, 2u, 2u < P.n_levels && i >= P.levels[2].z);
+    l = select(l, 3u, 3u < P.n_levels && i >= P.levels[3].z);
+    l = select(l, 4u, 4u < P.n_levels && i >= P.levels[4].z);
+    l = select(l, 5u, 5u < P.n_levels && i >= P.levels[5].z);
+    l = select(l, 6u, 6u < P.n_levels && i >= P.levels[6].z);
+    l = select(l, 7u, 7u < P.n_levels && i >= P.levels[7].z);
+    for (var k = 8u; k < P.n_levels; k++) {
+        if (i >= P.levels[k].z) { l = k; }
+    }
+    let r = i - loff(l);
+    let y = udiv(r, lw(l));
+    return vec3<u32>(r - y * lw(l), y, l);
+}
+
+// Entry k of an indirect dispatch over a list, 64 per workgroup, workgroups
+// (x, y) as written by the list's args (x <= 65535).
+fn list_index(wg: vec3<u32>, li: vec3<u32>) -> u32 {
+    return (wg.y * 65535u + wg.x) * 64u + li.x;
+}
+
+// Work lists of column passes (lfast): an entry names
 // the pixel `row` rows below the top of lane `lane`'s column.
 fn list_entry(lane: u32, row: u32) -> u32 { return (lane << 4u) | row; }
 

@@ -1,17 +1,20 @@
 // SPEC 9: non-maximum suppression among corner candidates. Mirrors
 // src/cpu/corner_nms.rs. `cand` (column-packed, common.wgsl pk_word) + `resp` -> survivors appended to `corners`
 // (GpuKeypoint, src/gpu/buffers.rs) with counters[CORNERS] as the cursor.
-// A column pass, all levels in one dispatch (over the tile list). The
-// append order is nondeterministic; select.wgsl puts the list in SPEC 9 order.
+// One invocation per candidate, all levels in one indirect dispatch over the
+// candidate list (cand_list.wgsl). The append order is nondeterministic;
+// select.wgsl puts the list in SPEC 9 order.
 // Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/corner_nms.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> cand: array<u32>;
-@group(0) @binding(2) var<storage, read> resp: array<u32>;
-@group(0) @binding(3) var<storage, read_write> corners: array<Kp>;
-@group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(2) var<storage, read> cand_list: array<u32>;
+@group(0) @binding(3) var<storage, read> resp: array<u32>;
+@group(0) @binding(4) var<storage, read_write> corners: array<Kp>;
+@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
 
-// counter::CORNERS in src/gpu/buffers.rs.
+// counter::CORNERS and counter::CANDS in src/gpu/buffers.rs.
 const C_CORNERS: u32 = 0u;
+const C_CANDS: u32 = 3u;
 
 // True iff candidate q beats candidate p: a greater response, or an equal one
 // and an earlier (y, x) position, so exactly one of a tied group survives.
@@ -75,15 +78,12 @@ fn suppress(l: u32, p: vec2<u32>) {
     corners[slot] = k;
 }
 
-// Work-efficient: the column's candidates are listed (list_candidates,
-// cand_list.wgsl, appended to this shader), then taken side by side.
+// Work-efficient: an indirect dispatch over the candidate list, one
+// invocation per candidate (cand_list.wgsl).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    list_candidates(column_span(wg, li), li.x);
-    workgroupBarrier();
-    let n = atomicLoad(&todo_n);
-    for (var k = li.x; k < n; k += 64u) {
-        let p = list_pixel(wg, todo[k]);
-        suppress(p.z, p.xy);
-    }
+    let k = list_index(wg, li);
+    if (k >= atomicLoad(&counters[C_CANDS])) { return; }
+    let p = atlas_pixel(cand_list[k]);
+    suppress(p.z, p.xy);
 }

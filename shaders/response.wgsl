@@ -1,8 +1,8 @@
 // SPEC 9: Harris corner response on D (7x7 block, 3x3 Sobel, k = 0.04), as
 // OpenCV ORB's HARRIS_SCORE. Mirrors src/cpu/response.rs.
-// `cand` (1 = candidate; column-packed, common.wgsl pk_word) + `denoised` -> `resp` (f32 bits) at candidates, 0
-// elsewhere (the pass clears `resp` first). A column pass, all levels in one dispatch (over the tile list); the
-// response itself runs on the workgroup's compacted candidates (see main).
+// The candidate list (`cand_list`, atlas indices; cand_list.wgsl) + `denoised` -> `resp` (f32 bits) at
+// candidates, 0 elsewhere (the pass clears `resp` first). One invocation per
+// candidate, all levels in one indirect dispatch over the list.
 //
 // Bit-identical to the CPU: the structure sums are exact integers, and the
 // final formula (harris_from_sums) is f32 in the CPU's operation order, with
@@ -11,9 +11,13 @@
 // a*b + c into an fma or reassociate (Rust does neither).
 // Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/response.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
-@group(0) @binding(1) var<storage, read> cand: array<u32>;
-@group(0) @binding(2) var<storage, read> denoised: array<u32>;
-@group(0) @binding(3) var<storage, read_write> resp: array<u32>;
+@group(0) @binding(1) var<storage, read> cand_list: array<u32>;
+@group(0) @binding(2) var<storage, read> counters: array<u32>;
+@group(0) @binding(3) var<storage, read> denoised: array<u32>;
+@group(0) @binding(4) var<storage, read_write> resp: array<u32>;
+
+// counter::CANDS in src/gpu/buffers.rs.
+const C_CANDS: u32 = 3u;
 
 // BLOCK / 2.
 const R: i32 = 3;
@@ -162,16 +166,15 @@ fn structure_sums(l: u32, x: i32, y: i32) -> vec3<i32> {
         + row_terms(r4, r5, r6) + row_terms(r5, r6, r7) + row_terms(r6, r7, r8);
 }
 
-// Work-efficient: the column's candidates are listed (list_candidates,
-// cand_list.wgsl, appended to this shader), then taken side by side.
+// Work-efficient: an indirect dispatch over the candidate list, one
+// invocation per candidate (cand_list.wgsl lists them, for this pass and
+// corner NMS), so nothing scans the levels' pixels here.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    list_candidates(column_span(wg, li), li.x);
-    workgroupBarrier();
-    let n = atomicLoad(&todo_n);
-    for (var k = li.x; k < n; k += 64u) {
-        let p = list_pixel(wg, todo[k]);
-        let s = structure_sums(p.z, i32(p.x), i32(p.y));
-        resp[loff(p.z) + p.y * lw(p.z) + p.x] = bitcast<u32>(harris_from_sums(s.x, s.y, s.z));
-    }
+    let k = list_index(wg, li);
+    if (k >= counters[C_CANDS]) { return; }
+    let i = cand_list[k];
+    let p = atlas_pixel(i);
+    let s = structure_sums(p.z, i32(p.x), i32(p.y));
+    resp[i] = bitcast<u32>(harris_from_sums(s.x, s.y, s.z));
 }

@@ -9,6 +9,7 @@ use lfast::cpu::lfast::{LfastParams, lfast};
 use lfast::cpu::select::{Corner, order, select};
 use lfast::cpu::{corner_nms, edge_map, response};
 use lfast::gpu::buffers::{counter, indirect};
+use lfast::gpu::cand_list::CandListPass;
 use lfast::gpu::corner_nms::CornerNmsPass;
 use lfast::gpu::response::ResponsePass;
 use lfast::gpu::select::SelectPass;
@@ -112,6 +113,8 @@ fn harris_constants_are_the_cpus() {
 fn response_matches_cpu_on_real_candidates() {
     let Some(ctx) = t::context() else { return };
     let pass = ResponsePass::new(&ctx.device);
+    // both run over the candidate list
+    let list = CandListPass::new(&ctx.device);
     let mut checked = 0;
     for name in IMAGES {
         let img = data(name);
@@ -124,6 +127,7 @@ fn response_matches_cpu_on_real_candidates() {
         }
         // stale responses: the pass must leave 0 at every pixel that is no candidate
         t::upload(&ctx, &b.resp, &vec![0xdead_beefu32; (b.resp.size() / 4) as usize]);
+        t::run(&ctx, &list, &b).unwrap();
         t::run(&ctx, &pass, &b).unwrap();
         for (l, lv) in levels.iter().enumerate() {
             let w = lv.denoised.width;
@@ -148,6 +152,8 @@ fn response_matches_cpu_at_every_pixel() {
     // conversions and the products round.
     let Some(ctx) = t::context() else { return };
     let pass = ResponsePass::new(&ctx.device);
+    // both run over the candidate list
+    let list = CandListPass::new(&ctx.device);
     let noise = |w: u32, h: u32, seed: u32| {
         let mut r = Rng::new(seed.into());
         Plane::from_vec(w, h, (0..w * h).map(|_| if r.below(2) == 0 { 0 } else { 255 }).collect()).unwrap()
@@ -170,6 +176,7 @@ fn response_matches_cpu_at_every_pixel() {
             t::upload_packed(&ctx, &b, &b.denoised, l, p);
             t::upload_packed(&ctx, &b, &b.cand, l, &Plane::from_vec(p.width, p.height, vec![1; p.len()]).unwrap());
         }
+        t::run(&ctx, &list, &b).unwrap();
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in lv.iter().enumerate() {
             let got = t::download_level(&ctx, &b, &b.resp, l).unwrap();
@@ -197,6 +204,8 @@ fn response_matches_cpu_at_every_pixel() {
 fn corner_nms_matches_cpu_on_real_images() {
     let Some(ctx) = t::context() else { return };
     let pass = CornerNmsPass::new(&ctx.device);
+    // both run over the candidate list
+    let list = CandListPass::new(&ctx.device);
     for name in IMAGES {
         let img = data(name);
         for r in [0, 1, 3] {
@@ -219,6 +228,7 @@ fn corner_nms_matches_cpu_on_real_images() {
             }
             // stale counters must not matter: prepare clears them
             t::upload(&ctx, &b.counters, &[7, 7, 7, 7]);
+            t::run(&ctx, &list, &b).unwrap();
             t::run(&ctx, &pass, &b).unwrap();
             let mut got: Vec<[u32; 12]> = download_corners(&ctx, &b).iter().map(bits).collect();
             got.sort();
@@ -236,6 +246,8 @@ fn corner_nms_breaks_ties_by_position() {
     // 0.0, equal under `beats`): exactly one of each tied group survives.
     let Some(ctx) = t::context() else { return };
     let pass = CornerNmsPass::new(&ctx.device);
+    // both run over the candidate list
+    let list = CandListPass::new(&ctx.device);
     let pool = [1.0f32, 2.0, -1.0, 0.0, -0.0, 2.0];
     for (w, h, levels, seed) in [(40, 40, 1, 1), (48, 40, 3, 2), (37, 29, 2, 3), (17, 1, 1, 4), (1, 1, 1, 5)] {
         for r in [0, 1, 2, 4] {
@@ -265,6 +277,7 @@ fn corner_nms_breaks_ties_by_position() {
                     want.push(bits(&corner_kp(&cfg, &c)));
                 }
             }
+            t::run(&ctx, &list, &b).unwrap();
             t::run(&ctx, &pass, &b).unwrap();
             let mut got: Vec<[u32; 12]> = download_corners(&ctx, &b).iter().map(bits).collect();
             got.sort();
@@ -278,6 +291,8 @@ fn corner_nms_breaks_ties_by_position() {
 fn corner_nms_literal() {
     let Some(ctx) = t::context() else { return };
     let pass = CornerNmsPass::new(&ctx.device);
+    // both run over the candidate list
+    let list = CandListPass::new(&ctx.device);
     let cfg = Config { n_levels: 1, nms_radius: 1, border: 7, ..Config::default() };
     let b = Buffers::new(&ctx.device, &cfg, 20, 20).unwrap();
     // a tied 2x2 group keeps its first in (y, x) order; (9, 9) beats nothing
@@ -299,6 +314,7 @@ fn corner_nms_literal() {
     }
     t::upload_packed(&ctx, &b, &b.cand, 0, &Plane::from_vec(20, 20, cand).unwrap());
     t::upload_level(&ctx, &b, &b.resp, 0, &resp);
+    t::run(&ctx, &list, &b).unwrap();
     t::run(&ctx, &pass, &b).unwrap();
     let mut got: Vec<(u32, u32)> = download_corners(&ctx, &b).iter().map(|k| (k.px, k.py)).collect();
     got.sort();
@@ -457,8 +473,12 @@ fn select_handles_an_empty_list() {
 #[test]
 fn response_nms_select_chain_matches_cpu() {
     let Some(ctx) = t::context() else { return };
-    let (resp, nms, sel) =
-        (ResponsePass::new(&ctx.device), CornerNmsPass::new(&ctx.device), SelectPass::new(&ctx.device));
+    let (list, resp, nms, sel) = (
+        CandListPass::new(&ctx.device),
+        ResponsePass::new(&ctx.device),
+        CornerNmsPass::new(&ctx.device),
+        SelectPass::new(&ctx.device),
+    );
     for name in ["coins.png", "text.png", "astronaut_256.png"] {
         let img = data(name);
         for cap in [0, 50, 500] {
@@ -486,9 +506,17 @@ fn response_nms_select_chain_matches_cpu() {
             let want: Vec<[u32; 12]> =
                 select(per_level, &b.layout.sizes, cap, false).iter().map(|c| bits(&corner_kp(&cfg, c))).collect();
             let run = |r: Result<(), Error>| r.unwrap_or_else(|e| panic!("{name}: {e}"));
+            run(t::run(&ctx, &list, &b));
             run(t::run(&ctx, &resp, &b));
             run(t::run(&ctx, &nms, &b));
             run(t::run(&ctx, &sel, &b));
+            // the candidate list: every candidate once, and its dispatch args
+            let n_cands = levels.iter().map(|lv| lv.cands.len()).sum::<usize>();
+            assert_eq!(t::download(&ctx, &b.counters).unwrap()[counter::CANDS] as usize, n_cands, "{name} candidates");
+            let g = n_cands.div_ceil(64) as u32;
+            let ind = t::download(&ctx, &b.indirect).unwrap();
+            let at = (indirect::CANDS / 4) as usize;
+            assert_eq!(ind[at..at + 3], [g.min(65535), g.div_ceil(65535), 1], "{name} candidate dispatch args");
             let got: Vec<[u32; 12]> = download_keypoints(&ctx, &b, n_corners).iter().map(bits).collect();
             assert_eq!(got, want, "{name} cap {cap}");
             assert!(!want.is_empty());

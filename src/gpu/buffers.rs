@@ -60,8 +60,12 @@ pub mod indirect {
     /// `dispatch_workgroups_indirect` with one workgroup per final keypoint:
     /// `(min(n, 65535), ceil(n / 65535), 1)` (orientation, orb).
     pub const KEYPOINT_GROUPS: u64 = 48;
+    /// `dispatch_workgroups_indirect` over the candidate list (64 per group):
+    /// `(min(g, 65535), ceil(g / 65535), 1)`, g = ceil(candidates / 64)
+    /// (response, corner NMS; written by the candidate-list pass).
+    pub const CANDS: u64 = 64;
     /// Size of the buffer.
-    pub const SIZE: u64 = 64;
+    pub const SIZE: u64 = 80;
 }
 
 /// Slots of [`Buffers::counters`].
@@ -72,6 +76,8 @@ pub mod counter {
     pub const KEYPOINTS: usize = 1;
     /// Corners taken by their level quota (select).
     pub const TAKEN: usize = 2;
+    /// Entries of the candidate list (`cand_list`).
+    pub const CANDS: usize = 3;
     /// Words in the buffer.
     pub const LEN: usize = 4;
 }
@@ -202,6 +208,9 @@ pub struct Buffers {
     pub edge_bits: wgpu::Buffer,
     /// L-FAST candidates (0/1), column-packed as `classes`.
     pub cand: wgpu::Buffer,
+    /// The atlas index of every L-FAST candidate, unordered
+    /// (shaders/cand_list.wgsl); as many slots as pixels.
+    pub cand_list: wgpu::Buffer,
     /// Harris response of candidates (f32 bits).
     pub resp: wgpu::Buffer,
     /// Corners surviving corner NMS, unordered ([`GpuKeypoint`]s).
@@ -330,6 +339,7 @@ impl Buffers {
         indirect_init[6] = 1;
         indirect_init[8] = 4;
         indirect_init[14] = 1;
+        indirect_init[18] = 1;
         let this = Self {
             params: init(
                 "params",
@@ -356,6 +366,7 @@ impl Buffers {
             edges: buf("edges", allocated.packed * 4),
             edge_bits: buf("edge_bits", allocated.tiles * TILE as u64 * 4),
             cand: buf("cand", allocated.packed * 4),
+            cand_list: px("cand_list"),
             resp: px("resp"),
             corners: buf("corners", cap * KP_WORDS * 4),
             ranks: buf("ranks", cap * 16),

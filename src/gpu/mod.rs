@@ -9,6 +9,7 @@
 
 pub mod blur;
 pub mod buffers;
+pub mod cand_list;
 pub mod classify;
 pub mod context;
 pub mod corner_nms;

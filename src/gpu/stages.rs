@@ -105,6 +105,7 @@ stages! {
     rules: RulesPass,
     hysteresis: HysteresisPass,
     lfast: LfastPass,
+    cand_list: CandListPass,
     response: ResponsePass,
     corner_nms: CornerNmsPass,
     select: SelectPass,
