@@ -193,16 +193,6 @@ fn list_index(wg: vec3<u32>, li: vec3<u32>) -> u32 {
     return (wg.y * 65535u + wg.x) * 64u + li.x;
 }
 
-// Work lists of column passes (lfast): an entry names
-// the pixel `row` rows below the top of lane `lane`'s column.
-fn list_entry(lane: u32, row: u32) -> u32 { return (lane << 4u) | row; }
-
-// (x, y, level) of entry e of workgroup wg's work list.
-fn list_pixel(wg: vec3<u32>, e: u32) -> vec3<u32> {
-    let p = tile_column(wg, vec3<u32>(e >> 4u, 0u, 0u));
-    return vec3<u32>(p.x, p.y + (e & 15u), p.z);
-}
-
 // One keypoint: GpuKeypoint in src/gpu/buffers.rs, 12 words (48 bytes).
 struct Kp {
     x: f32,

@@ -8,8 +8,17 @@
 
 @group(0) @binding(1) var<storage, read> edges: array<u32>;
 @group(0) @binding(2) var<storage, read> mask: array<u32>;
-@group(0) @binding(3) var<storage, read_write> cand: array<u32>;
+@group(0) @binding(3) var<storage, read_write> cand: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> edge_bits: array<u32>;
+@group(0) @binding(5) var<storage, read_write> edge_list: array<u32>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> indirect: array<u32>;
+
+// counter::EDGES and indirect::EDGES / 4 in src/gpu/buffers.rs.
+const C_EDGES: u32 = 4u;
+const I_EDGES: u32 = 20u;
+// Workgroups per dimension of an indirect dispatch.
+const MAX_GROUPS: u32 = 65535u;
 
 const EDGE: u32 = 255u;
 
@@ -139,13 +148,18 @@ fn window_nibble(top: u32, last: u32, l: u32, g: i32, k: i32, h: u32) -> u32 {
 }
 
 // Entry `windows`, the pass's first dispatch: a column pass whose invocation
-// writes its column's edge window (window_word) from the eight packed words
-// of rows y0 - 8 .. y0 + 23 (y0, a multiple of 16, is its tile's top row).
+// writes its column's edge window (tile_word) from the eight packed words of
+// rows y0 - 8 .. y0 + 23 (y0, a multiple of 16, is its tile's top row), and
+// appends the column's tested edge pixels (at least `border` (>= 7) from
+// every side) to `edge_list`: their rows as bits, then a `while` loop over
+// those only (an if-body in the walk would run every row, masked, on a SIMD
+// software rasteriser).
 @compute @workgroup_size(64, 1, 1)
 fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
     if (span.y >= span.z) { return; }
     let l = span.w;
+    let w = lw(l);
     let h = lh(l);
     // rows r - 8 .. r - 5, r = y0 + 4k: a whole packed word, or none of the
     // level; the eight loads unconditional (clamped into the level), the
@@ -163,61 +177,44 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
     bits |= window_nibble(top, last, l, g, 6, h);
     bits |= window_nibble(top, last, l, g, 7, h);
     edge_bits[tile_word(l, span.x, span.y / TILE)] = bits;
-}
-
-// Work-efficient: a column pass (tile_column) that lists its four tiles'
-// tested edge pixels in `todo` (workgroup memory) as it walks them; after one
-// barrier the workgroup's invocations take the list side by side, so the test
-// runs in as few SIMD lanes / warps as there are edge pixels, and mark the
-// corners in `found`; after a second barrier each invocation writes its
-// column's packed words of `cand`. Entries: list_entry (common.wgsl).
-var<workgroup> todo: array<u32, 1024>;
-// zero at the start of the workgroup (WGSL zero-initialises workgroup memory)
-var<workgroup> todo_n: atomic<u32>;
-// bit r of found[lane]: row r of the lane's column is a candidate (zero at the start)
-var<workgroup> found: array<atomic<u32>, 64>;
-
-@compute @workgroup_size(64, 1, 1)
-fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let span = column_span(wg, li);
-    let l = span.w;
-    let w = lw(l);
-    let h = lh(l);
-    // Only pixels at least `border` (>= 7) from every side are tested; a
-    // level with w or h <= 2 * border has none. Written this way (no
-    // w - border) so nothing underflows.
+    // The tested rows: b .. h - b - 1 of columns b .. w - b - 1 (a level
+    // with w or h <= 2 * border has none; written so nothing underflows),
+    // here rows y0 + r with r in [lo, hi).
     let b = max(P.border, 7u);
+    let lo = u32(clamp(i32(b) - i32(span.y), 0, 16));
+    let hi = u32(clamp(i32(h) - i32(b) - i32(span.y), 0, 16));
     let col = span.x >= b && span.x + b < w;
-    // the column's edges in its tile (bits 8 .. 23 of its window) that are
-    // tested, as row bits; then a loop over those only (an if-body in the walk
-    // would run every row, masked, on a SIMD software rasteriser)
-    var rows = 0u;
-    if (span.y < span.z && col) {
-        rows = (edge_bits[tile_word(l, span.x, span.y / TILE)] >> 8u) & 0xffffu;
-        // only rows b .. h - b - 1 (rows past the level's last are 0 in the
-        // window): rows y0 + r with r in [lo, hi)
-        let lo = u32(clamp(i32(b) - i32(span.y), 0, 16));
-        let hi = u32(clamp(i32(h) - i32(b) - i32(span.y), 0, 16));
-        rows &= select(0u, ((1u << hi) - 1u) & ~((1u << lo) - 1u), hi > lo);
-    }
+    var rows = select(0u, (bits >> 8u) & ((1u << hi) - 1u) & ~((1u << lo) - 1u), col && hi > lo);
+    let base = loff(l) + span.y * w + span.x;
     while (rows != 0u) {
         let r = countTrailingZeros(rows);
         rows &= rows - 1u;
-        if (P.use_mask == 0u || mask[loff(l) + (span.y + r) * w + span.x] != 0u) {
-            todo[atomicAdd(&todo_n, 1u)] = list_entry(li.x, r);
-        }
+        edge_list[atomicAdd(&counters[C_EDGES], 1u)] = base + r * w;
     }
-    workgroupBarrier();
-    let n = atomicLoad(&todo_n);
-    for (var k = li.x; k < n; k += 64u) {
-        let e = todo[k];
-        let p = list_pixel(wg, e);
-        if (is_corner(p.z, i32(p.x), i32(p.y))) { atomicOr(&found[e >> 4u], 1u << (e & 15u)); }
-    }
-    workgroupBarrier();
-    // Row r's bit becomes byte r % 4 of word r / 4 (a 0/1 byte).
-    let bits = atomicLoad(&found[li.x]);
-    for (var y = span.y; y < span.z; y += 4u) {
-        cand[pk_word(l, span.x, y)] = pk_from_bits(bits >> (y - span.y));
+}
+
+// Entry `args`, one invocation: the indirect args of `main` over the edge
+// list, ceil(n / 64) workgroups as (x, y, 1), x <= 65535.
+@compute @workgroup_size(1, 1, 1)
+fn args() {
+    let groups = (atomicLoad(&counters[C_EDGES]) + 63u) / 64u;
+    indirect[I_EDGES] = min(groups, MAX_GROUPS);
+    indirect[I_EDGES + 1u] = (groups + MAX_GROUPS - 1u) / MAX_GROUPS;
+    indirect[I_EDGES + 2u] = 1u;
+}
+
+// Entry `main`, work-efficient: one invocation per listed edge pixel, by
+// indirect dispatch over the edge list, so the test runs in as few SIMD lanes
+// / warps as there are edge pixels and nothing scans the levels' pixels. A
+// corner sets its byte of `cand` (column-packed, cleared by the pass's
+// prepare) with an atomic OR: other pixels of its word may be corners too.
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let k = list_index(wg, li);
+    if (k >= atomicLoad(&counters[C_EDGES])) { return; }
+    let i = edge_list[k];
+    let p = atlas_pixel(i);
+    if ((P.use_mask == 0u || mask[i] != 0u) && is_corner(p.z, i32(p.x), i32(p.y))) {
+        atomicOr(&cand[pk_word(p.z, p.x, p.y)], pk_place(1u, p.y));
     }
 }

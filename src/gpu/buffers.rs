@@ -64,8 +64,11 @@ pub mod indirect {
     /// `(min(g, 65535), ceil(g / 65535), 1)`, g = ceil(candidates / 64)
     /// (response, corner NMS; written by the candidate-list pass).
     pub const CANDS: u64 = 64;
+    /// `dispatch_workgroups_indirect` over the L-FAST edge list (64 per
+    /// group), as [`CANDS`] (the L-FAST test; written by the lfast pass).
+    pub const EDGES: u64 = 80;
     /// Size of the buffer.
-    pub const SIZE: u64 = 80;
+    pub const SIZE: u64 = 96;
 }
 
 /// Slots of [`Buffers::counters`].
@@ -78,8 +81,10 @@ pub mod counter {
     pub const TAKEN: usize = 2;
     /// Entries of the candidate list (`cand_list`).
     pub const CANDS: usize = 3;
+    /// Entries of the L-FAST edge list (`edge_list`).
+    pub const EDGES: usize = 4;
     /// Words in the buffer.
-    pub const LEN: usize = 4;
+    pub const LEN: usize = 8;
 }
 
 /// How much the buffers were allocated for; a frame whose layout fits reuses them.
@@ -211,6 +216,9 @@ pub struct Buffers {
     /// The atlas index of every L-FAST candidate, unordered
     /// (shaders/cand_list.wgsl); as many slots as pixels.
     pub cand_list: wgpu::Buffer,
+    /// The atlas index of every edge pixel the L-FAST test takes, unordered
+    /// (shaders/lfast.wgsl `windows`); as many slots as pixels.
+    pub edge_list: wgpu::Buffer,
     /// Harris response of candidates (f32 bits).
     pub resp: wgpu::Buffer,
     /// Corners surviving corner NMS, unordered ([`GpuKeypoint`]s).
@@ -340,6 +348,7 @@ impl Buffers {
         indirect_init[8] = 4;
         indirect_init[14] = 1;
         indirect_init[18] = 1;
+        indirect_init[22] = 1;
         let this = Self {
             params: init(
                 "params",
@@ -367,6 +376,7 @@ impl Buffers {
             edge_bits: buf("edge_bits", allocated.tiles * TILE as u64 * 4),
             cand: buf("cand", allocated.packed * 4),
             cand_list: px("cand_list"),
+            edge_list: px("edge_list"),
             resp: px("resp"),
             corners: buf("corners", cap * KP_WORDS * 4),
             ranks: buf("ranks", cap * 16),

@@ -6,7 +6,7 @@
 //! lists its candidates as it finds them (`cpu::lfast`), so this stage has no
 //! CPU mirror of its own.
 
-use super::buffers::Buffers;
+use super::buffers::{Buffers, counter};
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
 use super::pass::Pass;
 use crate::error::Result;
@@ -61,8 +61,8 @@ impl Pass for CandListPass {
     }
 
     fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
-        // The list's cursor and the frame's other counters (corner NMS's
-        // cursor, select's) start at 0: this is the first stage that counts.
-        encoder.clear_buffer(&b.counters, 0, None);
+        // The list's cursor and the counters of the stages after it (corner
+        // NMS's cursor, select's) start at 0; lfast clears its own.
+        encoder.clear_buffer(&b.counters, 0, Some(4 * (counter::CANDS as u64 + 1)));
     }
 }
