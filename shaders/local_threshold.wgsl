@@ -45,40 +45,36 @@ fn holding(o: u32, n: u32, size: u32, c0: u32, c1: u32) -> vec2<u32> {
     return r;
 }
 
-// Counts value v (< 16) in the register counters when `yes`: v in half
-// v % 2 of component v / 2 of lo8 (v < 8) or hi8.
-fn count_small(lo8: ptr<function, vec4<u32>>, hi8: ptr<function, vec4<u32>>, v: u32, yes: bool) {
-    let inc = vec4<u32>(select(0u, 1u << ((v & 1u) * 16u), yes));
-    let q = vec4<u32>(v >> 1u);
-    *lo8 += select(vec4<u32>(0u), inc, q == vec4<u32>(0u, 1u, 2u, 3u));
-    *hi8 += select(vec4<u32>(0u), inc, q == vec4<u32>(4u, 5u, 6u, 7u));
+// Counts value v (< 32) in the register counters when `yes`: 8-bit counters
+// four a word, v in byte v % 4 of component (v / 4) % 4 of c0 (v < 16) or c1.
+fn count_small(c0: ptr<function, vec4<u32>>, c1: ptr<function, vec4<u32>>, v: u32, yes: bool) {
+    let inc = vec4<u32>(select(0u, 1u << ((v & 3u) * 8u), yes));
+    let q = vec4<u32>(v >> 2u);
+    *c0 += select(vec4<u32>(0u), inc, q == vec4<u32>(0u, 1u, 2u, 3u));
+    *c1 += select(vec4<u32>(0u), inc, q == vec4<u32>(4u, 5u, 6u, 7u));
 }
 
 // Adds the register counters to the workgroup's bins and clears them: a
 // `while` loop over the non-zero ones.
-fn flush_small(lo8: ptr<function, vec4<u32>>, hi8: ptr<function, vec4<u32>>) {
-    let c = array<u32, 8>((*lo8).x, (*lo8).y, (*lo8).z, (*lo8).w, (*hi8).x, (*hi8).y, (*hi8).z, (*hi8).w);
-    var nz = 0u;
-    nz |= select(0u, 3u, c[0] != 0u);
-    nz |= select(0u, 3u << 2u, c[1] != 0u);
-    nz |= select(0u, 3u << 4u, c[2] != 0u);
-    nz |= select(0u, 3u << 6u, c[3] != 0u);
-    nz |= select(0u, 3u << 8u, c[4] != 0u);
-    nz |= select(0u, 3u << 10u, c[5] != 0u);
-    nz |= select(0u, 3u << 12u, c[6] != 0u);
-    nz |= select(0u, 3u << 14u, c[7] != 0u);
+fn flush_small(c0: ptr<function, vec4<u32>>, c1: ptr<function, vec4<u32>>) {
+    let a = *c0;
+    let b = *c1;
+    let zero = vec4<u32>(0u);
+    var nz = bits4(pk_rows(a.x) != zero) | (bits4(pk_rows(a.y) != zero) << 4u) | (bits4(pk_rows(a.z) != zero) << 8u)
+        | (bits4(pk_rows(a.w) != zero) << 12u) | (bits4(pk_rows(b.x) != zero) << 16u)
+        | (bits4(pk_rows(b.y) != zero) << 20u) | (bits4(pk_rows(b.z) != zero) << 24u)
+        | (bits4(pk_rows(b.w) != zero) << 28u);
     while (nz != 0u) {
         let v = firstTrailingBit(nz);
         nz &= nz - 1u;
-        // component v / 2 by selects (a private array indexed per lane is a gather)
-        let q = v >> 1u;
-        let lo = select(select((*lo8).x, (*lo8).y, q == 1u), select((*lo8).z, (*lo8).w, q == 3u), q >= 2u);
-        let hi = select(select((*hi8).x, (*hi8).y, q == 5u), select((*hi8).z, (*hi8).w, q == 7u), q >= 6u);
-        let n = (select(lo, hi, q >= 4u) >> ((v & 1u) * 16u)) & 0xffffu;
-        if (n != 0u) { atomicAdd(&bins[v], n); }
+        // word v / 4 by selects (a private array indexed per lane is a gather)
+        let q = v >> 2u;
+        let wa = select(select(a.x, a.y, q == 1u), select(a.z, a.w, q == 3u), q >= 2u);
+        let wb = select(select(b.x, b.y, q == 5u), select(b.z, b.w, q == 7u), q >= 6u);
+        atomicAdd(&bins[v], pk_byte(select(wa, wb, q >= 4u), v));
     }
-    *lo8 = vec4<u32>(0u);
-    *hi8 = vec4<u32>(0u);
+    *c0 = zero;
+    *c1 = zero;
 }
 
 @compute @workgroup_size(32, 1, 1)
@@ -104,37 +100,35 @@ fn cells(
         win = vec4<u32>(wx, wy);
     }
     // Columns li, li + 32, ... of the cell, each down its rows a word (four
-    // rows, `m` is column-packed) at a time. Values below 16 (~90% of the
-    // pixels of a KITTI frame) are counted in registers, 16-bit counters two
-    // a word (`small`: value v in half v % 2 of component v / 2), and added
-    // to the workgroup's bins once at the end; the other rows of a word are
-    // bits, whose atomics run in a `while` loop as often as the busiest lane
-    // of the SIMD group needs (an atomic under a per-row `if` costs every
-    // lane every row on a SIMD software rasteriser).
-    var lo8 = vec4<u32>(0u);
-    var hi8 = vec4<u32>(0u);
-    // pixels counted in registers since the last flush: a column adds at
-    // most its height, so flush before a counter could pass 65535
+    // rows, `m` is column-packed) at a time. Values below 32 (~95% of the
+    // pixels of a KITTI frame) are counted in registers, 8-bit counters four
+    // a word (count_small), and added to the workgroup's bins when a counter
+    // could overflow and at the end; the other rows of a word are bits, whose
+    // atomics run in a `while` loop as often as the busiest lane of the SIMD
+    // group needs (an atomic under a per-row `if` costs every lane every row
+    // on a SIMD software rasteriser).
+    var c0 = vec4<u32>(0u);
+    var c1 = vec4<u32>(0u);
+    // pixels counted in registers since the last flush (a word adds <= 4)
     var pending = 0u;
-    let col_h = y1 - y0;
     for (var x = x0 + li; x < x1; x += 32u) {
-        while (pending + col_h > 65535u) {
-            flush_small(&lo8, &hi8);
-            pending = 0u;
-        }
-        pending += col_h;
         for (var g4 = y0 >> 2u; g4 * 4u < y1; g4++) {
+            while (pending > 251u) {
+                flush_small(&c0, &c1);
+                pending = 0u;
+            }
             // rows a..b (of the word's four) inside the cell, a contiguous range
             let a = max(g4 * 4u, y0) - g4 * 4u;
             let b = min(g4 * 4u + 4u, y1) - 1u - g4 * 4u;
             let inside = (0xfu >> (3u - b)) & ~((1u << a) - 1u);
             let word = m[pk_word(l, x, g4 * 4u)];
             let v = pk_rows(word);
-            let small = v < vec4<u32>(16u);
-            count_small(&lo8, &hi8, v.x, (inside & 1u) != 0u && small.x);
-            count_small(&lo8, &hi8, v.y, (inside & 2u) != 0u && small.y);
-            count_small(&lo8, &hi8, v.z, (inside & 4u) != 0u && small.z);
-            count_small(&lo8, &hi8, v.w, (inside & 8u) != 0u && small.w);
+            let small = v < vec4<u32>(32u);
+            count_small(&c0, &c1, v.x, (inside & 1u) != 0u && small.x);
+            count_small(&c0, &c1, v.y, (inside & 2u) != 0u && small.y);
+            count_small(&c0, &c1, v.z, (inside & 4u) != 0u && small.z);
+            count_small(&c0, &c1, v.w, (inside & 8u) != 0u && small.w);
+            pending += 4u;
             var big = inside & ~bits4(small);
             while (big != 0u) {
                 let e = firstTrailingBit(big);
@@ -143,7 +137,7 @@ fn cells(
             }
         }
     }
-    flush_small(&lo8, &hi8);
+    flush_small(&c0, &c1);
     workgroupBarrier();
     let r = win;
     // bins li, li + 32, ...: the non-empty ones as bits, added in a `while`

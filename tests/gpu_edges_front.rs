@@ -526,6 +526,39 @@ fn local_threshold_clips_and_takes_lower_median() {
     assert_eq!(&t::download(&ctx, &b.windows).unwrap()[..want.len()], &want[..]);
 }
 
+/// Cells of many more pixels than an invocation's 8-bit register counters
+/// hold (shaders/local_threshold.wgsl flushes them every 252 pixels): a
+/// 1600x1200 level has 160x120 cells, 600 pixels per invocation, most of them
+/// one small value (counted in registers), some large (counted by atomics).
+#[test]
+fn local_threshold_counts_large_cells() {
+    let Some(ctx) = t::context() else { return };
+    let pass = LocalThresholdPass::new(&ctx.device);
+    let cfg = Config { n_levels: 1, ..Config::default() };
+    let (w, h) = (1600u32, 1200u32);
+    let mut r = Rng::new(91);
+    let m = Plane::<u16>::from_vec(
+        w,
+        h,
+        (0..w * h)
+            .map(|_| match r.below_u64(10) {
+                0 => 32 + r.below_u64(300) as u16,
+                1 => r.below_u64(32) as u16,
+                // mostly one value: ~480 of an invocation's pixels, past any 8-bit counter
+                _ => 3,
+            })
+            .collect(),
+    )
+    .unwrap();
+    let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
+    t::upload_packed(&ctx, &b, &b.m, 0, &m8(&m));
+    t::run(&ctx, &pass, &b).unwrap();
+    let g = cpu::local_threshold::local_threshold(&m);
+    let want: Vec<u32> = g.stats.iter().flat_map(|s| [s.min as u32, s.max as u32, s.median as u32, s.v3()]).collect();
+    assert_eq!(&t::download(&ctx, &b.windows).unwrap()[..want.len()], &want[..], "window statistics");
+    assert_eq!(&t::download(&ctx, &b.hist).unwrap()[..256], &cpu::histogram::histogram(&m)[..], "level histogram");
+}
+
 #[test]
 fn classify_matches_cpu() {
     let Some(ctx) = t::context() else { return };
