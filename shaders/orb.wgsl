@@ -17,7 +17,14 @@ const PI: f32 = 3.14159265358979323846;
 @group(0) @binding(3) var<storage, read> counters: array<u32>;
 // Per bin 256 pairs (x1, y1, x2, y2), pre-rotated to the bin's centre; with
 // orientation_bins = 0 the one unrotated table.
-@group(0) @binding(4) var<storage, read> patterns: array<vec4<i32>>;
+// One word per pair: x1, y1, x2, y2 as i8 bytes, lowest first (one load per
+// pair rather than four).
+@group(0) @binding(4) var<storage, read> patterns: array<u32>;
+
+// The pair (x1, y1, x2, y2) of a `patterns` word.
+fn pair_of(w: u32) -> vec4<i32> {
+    return vec4<i32>(bitcast<i32>(w << 24u), bitcast<i32>(w << 16u), bitcast<i32>(w << 8u), bitcast<i32>(w)) >> vec4<u32>(24u);
+}
 @group(0) @binding(5) var<storage, read_write> descriptors: array<u32>;
 
 // Pixel (x, y) of level l, clamped into the level; `smoothed` is
@@ -69,7 +76,7 @@ fn describe_part(kp: Kp, lane: u32) {
     var bits = 0u;
     for (var j = 0u; j < 4u; j++) {
         let pair = 4u * lane + j;
-        var p = patterns[base + pair];
+        var p = pair_of(patterns[base + pair]);
         if (continuous) { p = rotate(p, c, s); }
         let va = px(l, x + p.x, y + p.y);
         let vb = px(l, x + p.z, y + p.w);

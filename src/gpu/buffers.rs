@@ -242,7 +242,8 @@ pub struct Buffers {
     /// Horizontal blur pass output: Q8 sums, two rows of a column per word
     /// (shaders/blur.wgsl), in the first half of each level's atlas range.
     pub blur_tmp: wgpu::Buffer,
-    /// Rotated patterns: per bin 256 pairs of four i32 (x1, y1, x2, y2).
+    /// Rotated patterns: per bin 256 pairs, each one word of four i8 (x1, y1,
+    /// x2, y2, lowest byte first).
     pub patterns: wgpu::Buffer,
     /// Orientation sector boundaries: per bin `(cos, sin)` in Q8 as two i32
     /// (`AngleBins::bounds`), `max(1, orientation_bins)` pairs.
@@ -423,11 +424,12 @@ impl Buffers {
 
 /// The rotated pattern tables as i32 words: bin-major, 256 pairs of 4.
 /// With `orientation_bins = 0` the one unrotated table (the shader rotates).
-fn pattern_words(cfg: &Config) -> Vec<i32> {
+fn pattern_words(cfg: &Config) -> Vec<u32> {
     let tables: Vec<Vec<[i8; 4]>> = if cfg.orientation_bins > 0 {
         RotatedPatterns::new(Pattern::orb(), cfg.orientation_bins).tables
     } else {
         vec![Pattern::orb().pairs.clone()]
     };
-    tables.iter().flatten().flat_map(|p| p.map(|c| c as i32)).collect()
+    // one word per pair: x1, y1, x2, y2 as its bytes, lowest first
+    tables.iter().flatten().map(|p| u32::from_le_bytes(p.map(|c| c as u8))).collect()
 }
