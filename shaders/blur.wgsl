@@ -57,6 +57,27 @@ fn taps4(v0: u32, v1: u32, v2: u32, v3: u32, v4: u32, v5: u32, v6: u32) -> vec4<
 // stores are unconditional: a column past the level's edge, or a pair of rows
 // past its last row, stores the value before it again at the same place (a
 // SIMD software rasteriser runs a store under `if` for every lane).
+// The horizontal pass's stores: base word k (column x0, rows y0, y0 + 1),
+// the offset `below` of the second pair (0 past the level's last row), the
+// column c last stored and its two words.
+struct Stores {
+    k: u32,
+    below: u32,
+    c: u32,
+    lo: u32,
+    hi: u32,
+}
+
+// Stores column `col` of the four (taps t of its four rows) when `inside`,
+// else column c (the last inside) again: the same words at the same place.
+fn store_column(st: ptr<function, Stores>, col: u32, inside: bool, t: vec4<u32>) {
+    (*st).c = select((*st).c, col, inside);
+    (*st).lo = select((*st).lo, t.x | (t.y << 16u), inside);
+    (*st).hi = select((*st).hi, select((*st).lo, t.z | (t.w << 16u), (*st).below != 0u), inside);
+    blur_tmp[(*st).k + (*st).c] = (*st).lo;
+    blur_tmp[(*st).k + (*st).c + (*st).below] = (*st).hi;
+}
+
 @compute @workgroup_size(64, 1, 1)
 fn horizontal(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let o = workgroup_tile(wg, li.x / TILE);
@@ -80,33 +101,15 @@ fn horizontal(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id
     let v7 = gray[pk_word(l, reflected(ix + 4, iw), y0)];
     let v8 = gray[pk_word(l, reflected(ix + 5, iw), y0)];
     let v9 = gray[pk_word(l, reflected(ix + 6, iw), y0)];
-    let k = loff(l) + (y0 >> 1u) * w + x0;
+    var st: Stores;
+    st.k = loff(l) + (y0 >> 1u) * w + x0;
     // the second pair of rows only inside the level, else the first again
-    let below = select(0u, w, y0 + 2u < h);
-    var t = taps4(v0, v1, v2, v3, v4, v5, v6);
-    var lo = t.x | (t.y << 16u);
-    var hi = select(lo, t.z | (t.w << 16u), below != 0u);
-    blur_tmp[k] = lo;
-    blur_tmp[k + below] = hi;
+    st.below = select(0u, w, y0 + 2u < h);
+    store_column(&st, 0u, true, taps4(v0, v1, v2, v3, v4, v5, v6));
     // columns x0 + 1 .. x0 + 3 only inside the level, else column x0 + c - 1 again
-    var c = select(0u, 1u, x0 + 1u < w);
-    t = taps4(v1, v2, v3, v4, v5, v6, v7);
-    lo = select(lo, t.x | (t.y << 16u), c == 1u);
-    hi = select(hi, select(lo, t.z | (t.w << 16u), below != 0u), c == 1u);
-    blur_tmp[k + c] = lo;
-    blur_tmp[k + c + below] = hi;
-    c = select(c, 2u, x0 + 2u < w);
-    t = taps4(v2, v3, v4, v5, v6, v7, v8);
-    lo = select(lo, t.x | (t.y << 16u), c == 2u);
-    hi = select(hi, select(lo, t.z | (t.w << 16u), below != 0u), c == 2u);
-    blur_tmp[k + c] = lo;
-    blur_tmp[k + c + below] = hi;
-    c = select(c, 3u, x0 + 3u < w);
-    t = taps4(v3, v4, v5, v6, v7, v8, v9);
-    lo = select(lo, t.x | (t.y << 16u), c == 3u);
-    hi = select(hi, select(lo, t.z | (t.w << 16u), below != 0u), c == 3u);
-    blur_tmp[k + c] = lo;
-    blur_tmp[k + c + below] = hi;
+    store_column(&st, 1u, x0 + 1u < w, taps4(v1, v2, v3, v4, v5, v6, v7));
+    store_column(&st, 2u, x0 + 2u < w, taps4(v2, v3, v4, v5, v6, v7, v8));
+    store_column(&st, 3u, x0 + 3u < w, taps4(v3, v4, v5, v6, v7, v8, v9));
 }
 
 // Row y (inside level l) of column x of `blur_tmp`.

@@ -18,8 +18,6 @@
 const C_CANDS: u32 = 3u;
 // indirect::CANDS / 4 in src/gpu/buffers.rs.
 const I_CANDS: u32 = 16u;
-// Workgroups per dimension of an indirect dispatch.
-const MAX_GROUPS: u32 = 65535u;
 
 // Appends the column's candidates: its rows as bits first (`cand` is
 // column-packed: a word per four rows, read unconditionally), then a loop
@@ -52,8 +50,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
 // x <= 65535.
 @compute @workgroup_size(1, 1, 1)
 fn args() {
-    let groups = (atomicLoad(&counters[C_CANDS]) + 63u) / 64u;
-    indirect[I_CANDS] = min(groups, MAX_GROUPS);
-    indirect[I_CANDS + 1u] = (groups + MAX_GROUPS - 1u) / MAX_GROUPS;
-    indirect[I_CANDS + 2u] = 1u;
+    let g = list_args(atomicLoad(&counters[C_CANDS]));
+    indirect[I_CANDS] = g.x;
+    indirect[I_CANDS + 1u] = g.y;
+    indirect[I_CANDS + 2u] = g.z;
 }

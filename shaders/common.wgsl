@@ -74,6 +74,33 @@ fn udiv(n: u32, d: u32) -> u32 {
     return select(q, q + 1u, (q + 1u) * d <= n);
 }
 
+// The level holding tile t (`tiles`) or atlas index t (else): the last level
+// whose first tile (P.tiles[l].x) or first pixel (P.levels[l].z) is <= t.
+// Selects with constant indices for the usual levels, a loop only past 8 (a
+// loop costs a SIMD software rasteriser its masks); `tiles` is a constant at
+// every call, so the select between the fields folds away.
+fn level_holding(t: u32, tiles: bool) -> u32 {
+    var l = 0u;
+    l = select(l, 1u, 1u < P.n_levels && t >= select(P.levels[1].z, P.tiles[1].x, tiles));
+    l = select(l, 2u, 2u < P.n_levels && t >= select(P.levels[2].z, P.tiles[2].x, tiles));
+    l = select(l, 3u, 3u < P.n_levels && t >= select(P.levels[3].z, P.tiles[3].x, tiles));
+    l = select(l, 4u, 4u < P.n_levels && t >= select(P.levels[4].z, P.tiles[4].x, tiles));
+    l = select(l, 5u, 5u < P.n_levels && t >= select(P.levels[5].z, P.tiles[5].x, tiles));
+    l = select(l, 6u, 6u < P.n_levels && t >= select(P.levels[6].z, P.tiles[6].x, tiles));
+    l = select(l, 7u, 7u < P.n_levels && t >= select(P.levels[7].z, P.tiles[7].x, tiles));
+    for (var k = 8u; k < P.n_levels; k++) {
+        if (t >= select(P.levels[k].z, P.tiles[k].x, tiles)) { l = k; }
+    }
+    return l;
+}
+
+// The indirect dispatch args (x, y, 1) over a list of n entries, 64 per
+// workgroup (list_index), x <= 65535.
+fn list_args(n: u32) -> vec3<u32> {
+    let groups = (n + 63u) / 64u;
+    return vec3<u32>(min(groups, 65535u), (groups + 65534u) / 65535u, 1u);
+}
+
 // Per-pixel passes are dispatched over the list of the 16x16 tiles of every
 // level (FrameLayout::pixel_groups), so no workgroup falls outside its level.
 // (x0, y0, level) of tile t's top-left pixel; NO_TILE (outside every level)
@@ -81,19 +108,7 @@ fn udiv(n: u32, d: u32) -> u32 {
 const NO_TILE: u32 = 0xffffffffu;
 fn tile_origin(t: u32) -> vec3<u32> {
     if (t >= P.total_tiles) { return vec3<u32>(NO_TILE, NO_TILE, 0u); }
-    // The level holding tile t: the last whose first tile is <= t (selects
-    // with constant indices for the usual levels, a loop only past 8).
-    var l = 0u;
-    l = select(l, 1u, 1u < P.n_levels && t >= P.tiles[1].x);
-    l = select(l, 2u, 2u < P.n_levels && t >= P.tiles[2].x);
-    l = select(l, 3u, 3u < P.n_levels && t >= P.tiles[3].x);
-    l = select(l, 4u, 4u < P.n_levels && t >= P.tiles[4].x);
-    l = select(l, 5u, 5u < P.n_levels && t >= P.tiles[5].x);
-    l = select(l, 6u, 6u < P.n_levels && t >= P.tiles[6].x);
-    l = select(l, 7u, 7u < P.n_levels && t >= P.tiles[7].x);
-    for (var k = 8u; k < P.n_levels; k++) {
-        if (t >= P.tiles[k].x) { l = k; }
-    }
+    let l = level_holding(t, true);
     // (r % tx, r / tx): r < 2^24 (udiv)
     let r = t - P.tiles[l].x;
     let tx = P.tiles[l].y;
@@ -168,20 +183,9 @@ fn tile_word(l: u32, x: u32, ty: u32) -> u32 {
 }
 
 // (x, y, level) of atlas index i (a pixel of some level): the level by
-// selects on the levels' offsets (a loop only past 8, as tile_origin), the
-// row by udiv (exact: the row is below 2^14 and w > (w h) / 2^23).
+// level_holding, the row by udiv (exact: the row is below 2^14 and w > (w h) / 2^23).
 fn atlas_pixel(i: u32) -> vec3<u32> {
-    var l = 0u;
-    l = select(l, 1u, 1u < P.n_levels && i >= P.levels[1].z);
-    l = select(l, 2u, 2u < P.n_levels && i >= P.levels[2].z);
-    l = select(l, 3u, 3u < P.n_levels && i >= P.levels[3].z);
-    l = select(l, 4u, 4u < P.n_levels && i >= P.levels[4].z);
-    l = select(l, 5u, 5u < P.n_levels && i >= P.levels[5].z);
-    l = select(l, 6u, 6u < P.n_levels && i >= P.levels[6].z);
-    l = select(l, 7u, 7u < P.n_levels && i >= P.levels[7].z);
-    for (var k = 8u; k < P.n_levels; k++) {
-        if (i >= P.levels[k].z) { l = k; }
-    }
+    let l = level_holding(i, false);
     let r = i - loff(l);
     let y = udiv(r, lw(l));
     return vec3<u32>(r - y * lw(l), y, l);

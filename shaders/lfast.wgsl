@@ -17,8 +17,6 @@
 // counter::EDGES and indirect::EDGES / 4 in src/gpu/buffers.rs.
 const C_EDGES: u32 = 4u;
 const I_EDGES: u32 = 20u;
-// Workgroups per dimension of an indirect dispatch.
-const MAX_GROUPS: u32 = 65535u;
 
 const EDGE: u32 = 255u;
 
@@ -197,10 +195,10 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
 // list, ceil(n / 64) workgroups as (x, y, 1), x <= 65535.
 @compute @workgroup_size(1, 1, 1)
 fn args() {
-    let groups = (atomicLoad(&counters[C_EDGES]) + 63u) / 64u;
-    indirect[I_EDGES] = min(groups, MAX_GROUPS);
-    indirect[I_EDGES + 1u] = (groups + MAX_GROUPS - 1u) / MAX_GROUPS;
-    indirect[I_EDGES + 2u] = 1u;
+    let g = list_args(atomicLoad(&counters[C_EDGES]));
+    indirect[I_EDGES] = g.x;
+    indirect[I_EDGES + 1u] = g.y;
+    indirect[I_EDGES + 2u] = g.z;
 }
 
 // Entry `main`, work-efficient: one invocation per listed edge pixel, by

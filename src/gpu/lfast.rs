@@ -28,15 +28,7 @@ pub const BINDINGS: &[Binding] = &[
 /// The bindings of `main`, which is dispatched indirectly: all but
 /// `indirect`, which that dispatch reads its size from (a buffer may not be
 /// bound as storage while it is the dispatch's indirect buffer).
-const TEST_BINDINGS: &[Binding] = &[
-    PARAMS,
-    b(1, "edges", Slot::Read),
-    b(2, "mask", Slot::Read),
-    b(3, "cand", Slot::ReadWrite),
-    b(4, "edge_bits", Slot::ReadWrite),
-    b(5, "edge_list", Slot::ReadWrite),
-    b(6, "counters", Slot::ReadWrite),
-];
+const TEST_BINDINGS: &[Binding] = BINDINGS.split_at(7).0;
 
 /// [`LfastPass`]'s bind groups: `windows` and `args` (with `indirect`), `main`.
 #[derive(Debug)]
