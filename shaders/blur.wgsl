@@ -49,14 +49,6 @@ fn taps4(v0: u32, v1: u32, v2: u32, v3: u32, v4: u32, v5: u32, v6: u32) -> vec4<
 // `blur_tmp` holds two rows of a column per word, row 2k in the low half of
 // word loff(l) + k * w + x (the first half of the level's atlas range).
 //
-// Horizontal: each invocation takes four columns of one packed word row
-// (four rows) of a tile: lane r of the tile's 16 has columns 4 (r % 4) .. + 4
-// and rows 4 (r / 4) .. + 4. It reads the ten gray words of columns x0 - 3 ..
-// x0 + 6 (reflected) once, and one gray word gives four rows' taps, which two
-// blur_tmp words take. The four columns are written out, no loop, and the
-// stores are unconditional: a column past the level's edge, or a pair of rows
-// past its last row, stores the value before it again at the same place (a
-// SIMD software rasteriser runs a store under `if` for every lane).
 // The horizontal pass's stores: base word k (column x0, rows y0, y0 + 1),
 // the offset `below` of the second pair (0 past the level's last row), the
 // column c last stored and its two words.
@@ -78,6 +70,14 @@ fn store_column(st: ptr<function, Stores>, col: u32, inside: bool, t: vec4<u32>)
     blur_tmp[(*st).k + (*st).c + (*st).below] = (*st).hi;
 }
 
+// Horizontal: each invocation takes four columns of one packed word row
+// (four rows) of a tile: lane r of the tile's 16 has columns 4 (r % 4) .. + 4
+// and rows 4 (r / 4) .. + 4. It reads the ten gray words of columns x0 - 3 ..
+// x0 + 6 (reflected) once, and one gray word gives four rows' taps, which two
+// blur_tmp words take. The four columns are written out, no loop, and the
+// stores are unconditional: a column past the level's edge, or a pair of rows
+// past its last row, stores the value before it again at the same place (a
+// SIMD software rasteriser runs a store under `if` for every lane).
 @compute @workgroup_size(64, 1, 1)
 fn horizontal(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let o = workgroup_tile(wg, li.x / TILE);

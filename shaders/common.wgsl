@@ -177,7 +177,7 @@ fn pk_complete(y: u32, end: u32) -> bool { return (y & 3u) == 3u || y + 1u == en
 
 // Tile-column planes (lfast's `edge_bits`, rules' `ruled`): one word per
 // column of every tile, in tile-list order (FrameLayout::tile_range,
-// gpu::layout::pack_tile_bits): the word of column x of tile row ty of level l.
+// gpu::layout::tile_word): the word of column x of tile row ty of level l.
 fn tile_word(l: u32, x: u32, ty: u32) -> u32 {
     return (P.tiles[l].x + ty * P.tiles[l].y + x / TILE) * TILE + x % TILE;
 }

@@ -20,9 +20,10 @@
 //   merge        union of each active pixel with its active left, up-left,
 //                up and up-right neighbours (the other four see it as theirs),
 //                as few of them as keep the components (see merge)
-//   compress     labels[i] = root of i, and bit `root` of flags set for every
-//                STRONG pixel (`flags` is cleared by the pass's prepare)
-//   final_edges  edges = 255 iff active and bit labels[i] of flags is set
+//   compress     per vertical run of a walk: labels[top] = root of the top,
+//                and bit `root` of flags set if the run holds a STRONG pixel
+//                (`flags` is cleared by the pass's prepare)
+//   final_edges  a run is edge (255) iff bit labels[top] of flags is set
 // No host loop and no iteration cap: the result is exact after one pass of
 // each, whatever the length or shape of a contour. Through the complement,
 // atomicMin of a parent is atomicMax of its stored word.

@@ -309,6 +309,13 @@ pub fn pack_level(w: u32, h: u32, v: &[u8]) -> Vec<u32> {
     words
 }
 
+/// Index, within its level's range of a tile-column plane (`ruled`,
+/// `edge_bits`; [`FrameLayout::tile_range`]), of the word of column x for row
+/// y, for a level `tx` tiles wide: common.wgsl `tile_word`.
+pub fn tile_word(tx: u32, x: u32, y: u32) -> usize {
+    (((y / TILE) * tx + x / TILE) * TILE + x % TILE) as usize
+}
+
 /// SPEC 7's ruled classes of a `w x h` level (NONE 0, WEAK 2, STRONG 4, in
 /// row-major order) as the GPU's `ruled` plane holds them
 /// (shaders/rules.wgsl): per 16x16 tile in row-major order, one word per
@@ -333,9 +340,8 @@ pub fn pack_ruled(w: u32, h: u32, v: &[u8]) -> Vec<u32> {
     let mut words = vec![0u32; (tx * ty * TILE) as usize];
     for (i, &c) in v.iter().enumerate().take((w * h) as usize) {
         let (x, y) = (i as u32 % w, i as u32 / w);
-        let k = (((y / TILE) * tx + x / TILE) * TILE + x % TILE) as usize;
         let r = y % TILE;
-        words[k] |= (u32::from(c != 0) << r) | (u32::from(c == 4) << (16 + r));
+        words[tile_word(tx, x, y)] |= (u32::from(c != 0) << r) | (u32::from(c == 4) << (16 + r));
     }
     words
 }
@@ -346,7 +352,7 @@ pub fn unpack_ruled(w: u32, h: u32, words: &[u32]) -> Vec<u8> {
     (0..w * h)
         .map(|i| {
             let (x, y) = (i % w, i / w);
-            let word = words[(((y / TILE) * tx + x / TILE) * TILE + x % TILE) as usize];
+            let word = words[tile_word(tx, x, y)];
             let r = y % TILE;
             match ((word >> r) & 1, (word >> (16 + r)) & 1) {
                 (0, _) => 0,
