@@ -36,9 +36,15 @@ macro_rules! stages {
         }
 
         impl Passes {
-            /// Compiles every stage's pipelines.
+            /// Compiles every stage's pipelines, each stage on its own scoped
+            /// thread: shader translation and the driver's compile take most
+            /// of a detector's start (~145 ms of lavapipe's ~180), and stages
+            /// are independent.
             pub(crate) fn new(device: &wgpu::Device) -> Self {
-                Self { $($m: Pass::new(device),)* }
+                std::thread::scope(|s| {
+                    $(let $m = s.spawn(|| <super::$m::$ty as Pass>::new(device));)*
+                    Self { $($m: $m.join().unwrap_or_else(|e| std::panic::resume_unwind(e)),)* }
+                })
             }
 
             /// Binds every stage to `b`.
