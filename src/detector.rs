@@ -10,7 +10,7 @@ use crate::gpu::{GpuContext, GpuOptions};
 use crate::image::{GrayView, Plane};
 use crate::keypoint::{Descriptor, KeyPoint};
 #[cfg(feature = "gpu")]
-use std::sync::{Condvar, Mutex};
+use std::sync::Mutex;
 
 /// Which path runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -43,57 +43,7 @@ impl std::str::FromStr for Backend {
 #[cfg(feature = "gpu")]
 struct Gpu {
     det: GpuDetector,
-    ws: Workspaces,
-}
-
-/// Frames one [`Detector`] keeps in flight on the GPU when several threads
-/// call it at once (the CLI's pool): each has its own workspace, so one
-/// thread uploads, records and reads back while the GPU runs another's frame.
-#[cfg(feature = "gpu")]
-const FRAMES_IN_FLIGHT: usize = 2;
-
-/// The [`Detector`]'s GPU workspaces: at most [`FRAMES_IN_FLIGHT`], made on
-/// first use (a single-threaded caller only ever makes one), each used by
-/// one frame at a time.
-#[cfg(feature = "gpu")]
-#[derive(Default)]
-struct Workspaces {
-    /// The idle workspaces, and how many exist (idle or in use).
-    state: Mutex<(Vec<GpuWorkspace>, usize)>,
-    returned: Condvar,
-}
-
-#[cfg(feature = "gpu")]
-impl Workspaces {
-    /// An idle workspace, or `None` for a new one to be made (counted as
-    /// existing); waits while all [`FRAMES_IN_FLIGHT`] are in use.
-    fn take(&self) -> Result<Option<GpuWorkspace>> {
-        let poisoned = |_| Error::Gpu { reason: "workspace lock poisoned".into() };
-        let mut st = self.state.lock().map_err(poisoned)?;
-        loop {
-            if let Some(ws) = st.0.pop() {
-                return Ok(Some(ws));
-            }
-            if st.1 < FRAMES_IN_FLIGHT {
-                st.1 += 1;
-                return Ok(None);
-            }
-            st = self.returned.wait(st).map_err(poisoned)?;
-        }
-    }
-
-    /// Returns what [`take`](Self::take) gave, made or kept (`None`: none
-    /// was made after all).
-    fn put(&self, ws: Option<GpuWorkspace>) {
-        // a poisoned lock already failed the other callers; drop the workspace
-        if let Ok(mut st) = self.state.lock() {
-            match ws {
-                Some(ws) => st.0.push(ws),
-                None => st.1 -= 1,
-            }
-        }
-        self.returned.notify_one();
-    }
+    ws: Mutex<Option<GpuWorkspace>>,
 }
 
 /// Built without the `gpu` feature: there is never a GPU (an uninhabited type).
@@ -160,12 +110,7 @@ impl Detector {
                 }
             },
         };
-        Ok(Self {
-            cpu,
-            gpu: gpu.map(|det| Gpu { det, ws: Workspaces::default() }),
-            auto,
-            fell_back: Default::default(),
-        })
+        Ok(Self { cpu, gpu: gpu.map(|det| Gpu { det, ws: Mutex::new(None) }), auto, fell_back: Default::default() })
     }
 
     /// A detector on an embedder's device.
@@ -173,7 +118,7 @@ impl Detector {
     pub fn from_context(ctx: GpuContext, cfg: Config) -> Result<Self> {
         let cpu = CpuDetector::new(cfg.clone())?;
         let det = GpuDetector::new(ctx, cfg)?;
-        Ok(Self { cpu, gpu: Some(Gpu { det, ws: Workspaces::default() }), auto: false, fell_back: Default::default() })
+        Ok(Self { cpu, gpu: Some(Gpu { det, ws: Mutex::new(None) }), auto: false, fell_back: Default::default() })
     }
 
     /// A detector on an embedder's device that, like [`Backend::Auto`], runs a
@@ -219,10 +164,8 @@ impl Detector {
     ) -> Result<T> {
         let Some(g) = self.active_gpu() else { return on_cpu(&self.cpu) };
         let r = {
-            let mut ws = g.ws.take()?;
-            let r = on_gpu(&g.det, &mut ws);
-            g.ws.put(ws);
-            r
+            let mut ws = g.ws.lock().map_err(|_| Error::Gpu { reason: "workspace lock poisoned".into() })?;
+            on_gpu(&g.det, &mut ws)
         };
         match r {
             Ok(v) => Ok(v),

@@ -1193,9 +1193,8 @@ fn a_mask_does_not_outlive_its_frame_size() {
 
 #[test]
 fn one_detector_shared_by_threads() {
-    // The front door keeps up to two frames in flight, each in its own
-    // workspace: frames of different sizes from two threads at once all
-    // equal the CPU's.
+    // The front door's workspace is behind a lock: frames of different sizes
+    // from two threads at once all equal the CPU's.
     let Some(_) = t::context() else { return };
     let det = Detector::new(Config::default(), Backend::Gpu).unwrap();
     let cpu = CpuDetector::new(Config::default()).unwrap();
