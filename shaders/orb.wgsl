@@ -17,9 +17,9 @@ const PI: f32 = 3.14159265358979323846;
 @group(0) @binding(3) var<storage, read> counters: array<u32>;
 // Per bin 256 pairs (x1, y1, x2, y2), pre-rotated to the bin's centre; with
 // orientation_bins = 0 the one unrotated table.
-// One word per pair: x1, y1, x2, y2 as i8 bytes, lowest first (one load per
-// pair rather than four).
-@group(0) @binding(4) var<storage, read> patterns: array<u32>;
+// One word per pair: x1, y1, x2, y2 as i8 bytes, lowest first; an
+// invocation's four pairs are one vec4 (one load rather than sixteen).
+@group(0) @binding(4) var<storage, read> patterns: array<vec4<u32>>;
 
 // The pair (x1, y1, x2, y2) of a `patterns` word.
 fn pair_of(w: u32) -> vec4<i32> {
@@ -73,14 +73,19 @@ fn describe_part(kp: Kp, lane: u32) {
     let a = kp.angle * (PI / 180.0);
     let s = sin(a);
     let c = cos(a);
-    var bits = 0u;
-    for (var j = 0u; j < 4u; j++) {
-        let pair = 4u * lane + j;
-        var p = pair_of(patterns[base + pair]);
-        if (continuous) { p = rotate(p, c, s); }
-        let va = px(l, x + p.x, y + p.y);
-        let vb = px(l, x + p.z, y + p.w);
-        bits |= select(0u, 1u, va < vb) << (pair % 32u);
-    }
-    atomicOr(&words[lane / 8u], bits);
+    let four = patterns[(base >> 2u) + lane];
+    let bits = pair_bit(four.x, l, x, y, c, s, continuous) | (pair_bit(four.y, l, x, y, c, s, continuous) << 1u)
+        | (pair_bit(four.z, l, x, y, c, s, continuous) << 2u) | (pair_bit(four.w, l, x, y, c, s, continuous) << 3u);
+    // pairs 4 lane .. 4 lane + 3 are bits 4 (lane % 8) .. of word lane / 8
+    atomicOr(&words[lane / 8u], bits << (4u * (lane % 8u)));
+}
+
+// The bit of one pair (its `patterns` word w) of the keypoint at (x, y) of
+// level l: 1 iff the first point is darker than the second.
+fn pair_bit(w: u32, l: u32, x: i32, y: i32, c: f32, s: f32, continuous: bool) -> u32 {
+    var p = pair_of(w);
+    if (continuous) { p = rotate(p, c, s); }
+    let va = px(l, x + p.x, y + p.y);
+    let vb = px(l, x + p.z, y + p.w);
+    return select(0u, 1u, va < vb);
 }
