@@ -109,11 +109,12 @@ fn cells(
     // on a SIMD software rasteriser).
     var c0 = vec4<u32>(0u);
     var c1 = vec4<u32>(0u);
-    // pixels counted in registers since the last flush (a word adds <= 4)
+    // pixels counted in registers since the last flush (a word adds <= 4, so
+    // an `if` empties them in time: a `while` costs its loop masks every word)
     var pending = 0u;
     for (var x = x0 + li; x < x1; x += 32u) {
         for (var g4 = y0 >> 2u; g4 * 4u < y1; g4++) {
-            while (pending > 251u) {
+            if (pending > 251u) {
                 flush_small(&c0, &c1);
                 pending = 0u;
             }
