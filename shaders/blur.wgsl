@@ -17,19 +17,17 @@
 const ORB_KERNEL: array<u32, 7> = array<u32, 7>(18u, 34u, 49u, 54u, 49u, 34u, 18u);
 const R: i32 = 3;
 
-// BORDER_REFLECT_101 index (gfedcb|abcdefgh|gfedcba); a 1-pixel axis clamps.
-// Folds at 0 and at len - 1 (each fold brings an index beyond len - 1 back
-// by 2 (len - 1)); the loop runs again only for offsets beyond one period,
-// which only levels a few pixels long have. No division: a SIMD software
-// rasteriser divides lane by lane, and runs the inside case's early return
-// and the fold both.
+// BORDER_REFLECT_101 index (gfedcb|abcdefgh|gfedcba) of i in -6 ..= len + 5
+// (the taps reach 3 rows or columns past the level, from at most 3 past its
+// last); a 1-pixel axis clamps. Folds at 0 and at len - 1: the first fold
+// brings i within 2 (len - 1) of the range, the second into it, for len >= 3;
+// len 2 alternates (i & 1). Straight-line, no loop and no division: a SIMD
+// software rasteriser pays a loop's masks on every call, and divides lane by
+// lane.
 fn reflected(i: i32, len: i32) -> u32 {
     let p = len - 1;
-    var j = p - abs(p - abs(i));
-    while (j < 0 && p > 0) {
-        j = p - abs(p - abs(j));
-    }
-    return u32(max(j, 0));
+    let j = p - abs(p - abs(p - abs(p - abs(i))));
+    return u32(select(select(j, i & 1, p == 1), 0, p <= 0));
 }
 
 // The seven taps of ORB_KERNEL over v0..v6.
