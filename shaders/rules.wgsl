@@ -57,11 +57,13 @@ fn ruled_bits(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>, yy: i32, y0: i32, end: i
     return select(0u, v, yy < end);
 }
 
-// A column pass (tile_column): the 3x3 window walks down in registers. An
-// outer loop over the column's words (four rows) reads the next group's three
-// words unconditionally; the four rows are written out (`ruled_bits`: a loop
-// costs a SIMD software rasteriser its masks); the walk's word of `ruled` is
-// written once at the end (see median.wgsl for why not under `if`).
+// A column pass (tile_column): the 3x3 window walks down in registers. `step`
+// takes a word (four rows), reading the next group's three words
+// unconditionally, with the four rows written out (`ruled_bits`); the walk's
+// four words are written out too, no loop (a SIMD software rasteriser pays a
+// loop's masks every iteration; steps past the walk's end add no bits). The
+// walk's word of `ruled` is written once at the end (see median.wgsl for why
+// not under `if`).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = column_span(wg, li);
@@ -73,19 +75,24 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     var a = pk_byte3(words3(l, x, y0 - 1), u32(y0 - 1));
     var cur = words3(l, x, y0);
     var b = pk_byte3(cur, u32(y0));
-    var bits = 0u;
-    for (var y = y0; y < end; y += 4) {
-        // rows y + 4 .. y + 7: row y + 4 is the last group row's `c`
-        let nxt = words3(l, x, y + 4);
-        let c0 = pk_byte3(cur, u32(y + 1));
-        let c1 = pk_byte3(cur, u32(y + 2));
-        let c2 = pk_byte3(cur, u32(y + 3));
-        let c3 = pk_byte3(nxt, u32(y + 4));
-        bits |= ruled_bits(a, b, c0, y, y0, end) | ruled_bits(b, c0, c1, y + 1, y0, end)
-            | ruled_bits(c0, c1, c2, y + 2, y0, end) | ruled_bits(c1, c2, c3, y + 3, y0, end);
-        a = c2;
-        b = c3;
-        cur = nxt;
-    }
+    let bits = step(&a, &b, &cur, l, x, y0, y0, end) | step(&a, &b, &cur, l, x, y0 + 4, y0, end)
+        | step(&a, &b, &cur, l, x, y0 + 8, y0, end) | step(&a, &b, &cur, l, x, y0 + 12, y0, end);
     ruled[tile_word(l, x, span.y / TILE)] = bits;
+}
+
+// The `ruled` bits of rows y .. y + 3 (none past `end`); rows a (y - 1) and
+// b (y) and the words `cur` of y's group move down a group.
+fn step(a: ptr<function, vec3<u32>>, b: ptr<function, vec3<u32>>, cur: ptr<function, vec3<u32>>, l: u32, x: u32, y: i32, y0: i32, end: i32) -> u32 {
+    // rows y + 4 .. y + 7: row y + 4 is the last group row's `c`
+    let nxt = words3(l, x, y + 4);
+    let c0 = pk_byte3(*cur, u32(y + 1));
+    let c1 = pk_byte3(*cur, u32(y + 2));
+    let c2 = pk_byte3(*cur, u32(y + 3));
+    let c3 = pk_byte3(nxt, u32(y + 4));
+    let bits = ruled_bits(*a, *b, c0, y, y0, end) | ruled_bits(*b, c0, c1, y + 1, y0, end)
+        | ruled_bits(c0, c1, c2, y + 2, y0, end) | ruled_bits(c1, c2, c3, y + 3, y0, end);
+    *a = c2;
+    *b = c3;
+    *cur = nxt;
+    return bits;
 }
