@@ -72,24 +72,52 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let jb = pk_byte(grid[rows + (last >> 2u)], last);
     let vt = v3_of(win0, g.x, i, jt);
     let vb = v3_of(win0, g.x, i, jb);
-    for (var y = span.y; y < span.z; y += 4u) {
-        // `classes`, `nms`, `m` and the row windows are column-packed: a word
-        // of each per four rows (rows past the level's last are 0 in `nms`: NONE)
-        let flags = nms[pk_word(l, span.x, y)];
-        let mags = m[pk_word(l, span.x, y)];
-        let jw = grid[rows + (y >> 2u)];
-        let js = pk_rows(jw);
-        let v3 = select(vec4<u32>(vt), vec4<u32>(vb), js == vec4<u32>(jb));
-        var word = class_row(flags, mags, y, t1, v3.x) | class_row(flags, mags, y + 1u, t1, v3.y)
-            | class_row(flags, mags, y + 2u, t1, v3.z) | class_row(flags, mags, y + 3u, t1, v3.w);
-        var hard = bits4(js != vec4<u32>(jt) & js != vec4<u32>(jb)) & bits4(pk_rows(flags) != vec4<u32>(0u));
-        while (hard != 0u) {
-            let r = firstTrailingBit(hard);
-            hard &= hard - 1u;
-            let yy = y + r;
-            let v = v3_of(win0, g.x, i, pk_byte(jw, yy));
-            word = (word & ~pk_place(0xffu, yy)) | class_row(flags, mags, yy, t1, v);
-        }
-        classes[pk_word(l, span.x, y)] = word;
+    // the walk's four words (TILE rows), written out: a loop costs a SIMD
+    // software rasteriser its masks every iteration. A word past the walk's
+    // end (a level's last, partial tile) is its last word again, stored again.
+    let lastw = last & ~3u;
+    let k = Walk(l, span.x, rows, t1, win0, g.x, i, jt, jb, vt, vb);
+    step(k, min(span.y, lastw));
+    step(k, min(span.y + 4u, lastw));
+    step(k, min(span.y + 8u, lastw));
+    step(k, min(span.y + 12u, lastw));
+}
+
+// What every word of a walk needs: level, column, the row windows' offset in
+// `grid`, Otsu's t1, the level's first window, windows along x, the column's
+// window, the first and last rows' row windows and their V3.
+struct Walk {
+    l: u32,
+    x: u32,
+    rows: u32,
+    t1: u32,
+    win0: u32,
+    nx: u32,
+    i: u32,
+    jt: u32,
+    jb: u32,
+    vt: u32,
+    vb: u32,
+}
+
+// The word of `classes` of rows y .. y + 3 of the walk.
+fn step(k: Walk, y: u32) {
+    // `classes`, `nms`, `m` and the row windows are column-packed: a word
+    // of each per four rows (rows past the level's last are 0 in `nms`: NONE)
+    let flags = nms[pk_word(k.l, k.x, y)];
+    let mags = m[pk_word(k.l, k.x, y)];
+    let jw = grid[k.rows + (y >> 2u)];
+    let js = pk_rows(jw);
+    let v3 = select(vec4<u32>(k.vt), vec4<u32>(k.vb), js == vec4<u32>(k.jb));
+    var word = class_row(flags, mags, y, k.t1, v3.x) | class_row(flags, mags, y + 1u, k.t1, v3.y)
+        | class_row(flags, mags, y + 2u, k.t1, v3.z) | class_row(flags, mags, y + 3u, k.t1, v3.w);
+    var hard = bits4(js != vec4<u32>(k.jt) & js != vec4<u32>(k.jb)) & bits4(pk_rows(flags) != vec4<u32>(0u));
+    while (hard != 0u) {
+        let r = firstTrailingBit(hard);
+        hard &= hard - 1u;
+        let yy = y + r;
+        let v = v3_of(k.win0, k.nx, k.i, pk_byte(jw, yy));
+        word = (word & ~pk_place(0xffu, yy)) | class_row(flags, mags, yy, k.t1, v);
     }
+    classes[pk_word(k.l, k.x, y)] = word;
 }
