@@ -84,9 +84,9 @@ fn row_step(s: ptr<function, Walk>, l: u32, y: u32, yy: u32, cur: vec4<u32>, nxt
 
 // A column pass (tile_column): the invocation of column x walks its rows with
 // D of columns x-1..x+2 and S of columns x-1..x+1 in registers (rows y-1, y,
-// y+1). An outer loop over the column's words (four rows) reads the next
-// group's four words of D and writes one word of `m` and of `nms`, all
-// unconditionally; `row_step` takes the four rows. (Loads cached under `if` and
+// y+1). `step` takes a word (four rows): it reads the next group's four words
+// of D and writes one word of `m` and of `nms`, all unconditionally, and
+// `row_step` takes its four rows. (Loads cached under `if` and
 // stores under `if`, the earlier form, ran every row on a SIMD software
 // rasteriser, which executes an if-body masked for every lane.)
 @compute @workgroup_size(64, 1, 1)
@@ -108,16 +108,39 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     walk.dnext = d4_at(l, cur, span.y + 1u);
     walk.g = grad3(d4_at(l, cur, span.y), walk.dnext);
     walk.mid = s3(walk.g, cols);
-    for (var y = span.y; y < span.z; y += 4u) {
-        // rows y + 4 .. y + 7 (clamped): rows y + 2 .. y + 5 feed this group
-        let nxt = d4_words(l, x, y + 4u);
-        var out = row_step(&walk, l, y, y, cur, nxt, h, cols, span.z);
-        out |= row_step(&walk, l, y, y + 1u, cur, nxt, h, cols, span.z);
-        out |= row_step(&walk, l, y, y + 2u, cur, nxt, h, cols, span.z);
-        out |= row_step(&walk, l, y, y + 3u, cur, nxt, h, cols, span.z);
-        // `m` and `nms` are column-packed: a word each per four rows
-        m[pk_word(l, x, y)] = out.x;
-        nms[pk_word(l, x, y)] = out.y;
-        cur = nxt;
-    }
+    // the walk's four words (TILE rows), written out: a loop costs a SIMD
+    // software rasteriser its masks every iteration
+    var st = vec3<u32>(0u);
+    step(&walk, &cur, l, x, span.y, h, cols, span.z, &st);
+    step(&walk, &cur, l, x, span.y + 4u, h, cols, span.z, &st);
+    step(&walk, &cur, l, x, span.y + 8u, h, cols, span.z, &st);
+    step(&walk, &cur, l, x, span.y + 12u, h, cols, span.z, &st);
+}
+
+// The words of `m` and `nms` of rows y .. y + 3 (`cur`: D's words of their
+// group); `st` is the last store (index, m word, nms word), stored again
+// when y is past the walk's end (a level's last, partial tile): no store
+// under `if`.
+fn step(
+    walk: ptr<function, Walk>,
+    cur: ptr<function, vec4<u32>>,
+    l: u32,
+    x: u32,
+    y: u32,
+    h: u32,
+    cols: vec3<bool>,
+    end: u32,
+    st: ptr<function, vec3<u32>>,
+) {
+    // rows y + 4 .. y + 7 (clamped): rows y + 2 .. y + 5 feed this group
+    let nxt = d4_words(l, x, y + 4u);
+    var out = row_step(walk, l, y, y, *cur, nxt, h, cols, end);
+    out |= row_step(walk, l, y, y + 1u, *cur, nxt, h, cols, end);
+    out |= row_step(walk, l, y, y + 2u, *cur, nxt, h, cols, end);
+    out |= row_step(walk, l, y, y + 3u, *cur, nxt, h, cols, end);
+    *cur = nxt;
+    // `m` and `nms` are column-packed: a word each per four rows
+    *st = select(*st, vec3<u32>(pk_word(l, x, y), out), y < end);
+    m[(*st).x] = (*st).y;
+    nms[(*st).x] = (*st).z;
 }
