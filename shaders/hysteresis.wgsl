@@ -236,8 +236,18 @@ fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_i
         let root = parent(loff(c.w) + (c.y + r) * lw(c.w) + c.x);
         e |= select(0u, run_mask(act, r), ((atomicLoad(&flags[root >> 5u]) >> (root & 31u)) & 1u) != 0u);
     }
-    // `edges` is column-packed as `ruled`: bit r of e -> 255 at row c.y + r
-    for (var y = c.y; y < c.z; y += 4u) {
-        edges[pk_word(c.w, c.x, y)] = pk_from_bits(e >> (y - c.y)) * EDGE;
-    }
+    // `edges` is column-packed as `ruled`: bit r of e -> 255 at row c.y + r.
+    // The walk's four words written out (a loop costs a SIMD software
+    // rasteriser its masks every iteration); past the walk's end the last
+    // word again, at its place.
+    let last = (c.z - 1u) & ~3u;
+    store_edges(c, e, min(c.y, last));
+    store_edges(c, e, min(c.y + 4u, last));
+    store_edges(c, e, min(c.y + 8u, last));
+    store_edges(c, e, min(c.y + 12u, last));
+}
+
+// The word of `edges` of rows y .. y + 3 of walk c from its edge rows e.
+fn store_edges(c: vec4<u32>, e: u32, y: u32) {
+    edges[pk_word(c.w, c.x, y)] = pk_from_bits(e >> (y - c.y)) * EDGE;
 }
