@@ -123,9 +123,9 @@ fn smoothed_row(v0: u32, v1: u32, v2: u32, v3: u32, v4: u32, v5: u32, v6: u32, y
 
 // A column pass (tile_column): each invocation walks one column of a tile and
 // writes `smoothed` column-packed, a word per four rows. It keeps blur_tmp
-// rows y - 3 .. y + 3 in registers; the loop over the words reads rows y + 4
-// .. y + 7, two pair words, unconditionally (pair index clamped into the
-// level), and the four rows are written out. Rows past the level's last (at
+// rows y - 3 .. y + 3 in registers; each of the walk's four steps (written
+// out) reads rows y + 4 .. y + 7, two pair words, unconditionally (pair index
+// clamped into the level), and the four rows are written out. Rows past the level's last (at
 // most three are needed, reflected) are read again in a `while` loop that
 // only runs in the walks at the bottom of a level.
 @compute @workgroup_size(64, 1, 1)
@@ -137,40 +137,68 @@ fn vertical(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) 
     let h = lh(l);
     let ih = i32(h);
     let y0 = i32(span.y);
-    let col = loff(l) + x;
+    var a: Rows7;
+    a.r0 = tmp_row(l, x, reflected(y0 - 3, ih));
+    a.r1 = tmp_row(l, x, reflected(y0 - 2, ih));
+    a.r2 = tmp_row(l, x, reflected(y0 - 1, ih));
+    a.r3 = tmp_row(l, x, span.y);
+    a.r4 = tmp_row(l, x, reflected(y0 + 1, ih));
+    a.r5 = tmp_row(l, x, reflected(y0 + 2, ih));
+    a.r6 = tmp_row(l, x, reflected(y0 + 3, ih));
+    // the walk's four words (TILE rows), written out: a loop costs a SIMD
+    // software rasteriser its masks every iteration
+    var st = vec2<u32>(0u);
+    vstep(&a, l, x, span.y, span.z, &st);
+    vstep(&a, l, x, span.y + 4u, span.z, &st);
+    vstep(&a, l, x, span.y + 8u, span.z, &st);
+    vstep(&a, l, x, span.y + 12u, span.z, &st);
+}
+
+// blur_tmp rows y - 3 .. y + 3 of a walk's column.
+struct Rows7 {
+    r0: u32,
+    r1: u32,
+    r2: u32,
+    r3: u32,
+    r4: u32,
+    r5: u32,
+    r6: u32,
+}
+
+// The word of `smoothed` of rows y .. y + 3 of column x (a: blur_tmp rows
+// y - 3 .. y + 3, moved down four rows); `st` is the last store (index,
+// word), stored again when y is past the walk's end (a level's last,
+// partial tile): no store under `if`.
+fn vstep(a: ptr<function, Rows7>, l: u32, x: u32, y: u32, end: u32, st: ptr<function, vec2<u32>>) {
+    let h = lh(l);
     let w = lw(l);
     let last_pair = (h - 1u) >> 1u;
-    var a0 = tmp_row(l, x, reflected(y0 - 3, ih));
-    var a1 = tmp_row(l, x, reflected(y0 - 2, ih));
-    var a2 = tmp_row(l, x, reflected(y0 - 1, ih));
-    var a3 = tmp_row(l, x, span.y);
-    var a4 = tmp_row(l, x, reflected(y0 + 1, ih));
-    var a5 = tmp_row(l, x, reflected(y0 + 2, ih));
-    var a6 = tmp_row(l, x, reflected(y0 + 3, ih));
-    for (var y = span.y; y < span.z; y += 4u) {
-        let p = blur_tmp[col + min((y + 4u) >> 1u, last_pair) * w];
-        let q = blur_tmp[col + min((y + 6u) >> 1u, last_pair) * w];
-        var b4 = p & 0xffffu;
-        var b5 = p >> 16u;
-        var b6 = q & 0xffffu;
-        var b7 = q >> 16u;
-        // rows past the level's last: their reflection (bottom walks only)
-        let inside = min(select(0u, h - (y + 4u), h > y + 4u), 4u);
-        var past = 0xfu & ~((1u << inside) - 1u);
-        while (past != 0u) {
-            let k = firstTrailingBit(past);
-            past &= past - 1u;
-            let v = tmp_row(l, x, reflected(i32(y + 4u + k), ih));
-            b4 = select(b4, v, k == 0u);
-            b5 = select(b5, v, k == 1u);
-            b6 = select(b6, v, k == 2u);
-            b7 = select(b7, v, k == 3u);
-        }
-        let word = smoothed_row(a0, a1, a2, a3, a4, a5, a6, y, span.z)
-            | smoothed_row(a1, a2, a3, a4, a5, a6, b4, y + 1u, span.z)
-            | smoothed_row(a2, a3, a4, a5, a6, b4, b5, y + 2u, span.z)
-            | smoothed_row(a3, a4, a5, a6, b4, b5, b6, y + 3u, span.z);
-        smoothed[pk_word(l, x, y)] = word;
-        a0 = a4; a1 = a5; a2 = a6; a3 = b4; a4 = b5; a5 = b6; a6 = b7;
+    let col = loff(l) + x;
+    let p = blur_tmp[col + min((y + 4u) >> 1u, last_pair) * w];
+    let q = blur_tmp[col + min((y + 6u) >> 1u, last_pair) * w];
+    var b4 = p & 0xffffu;
+    var b5 = p >> 16u;
+    var b6 = q & 0xffffu;
+    var b7 = q >> 16u;
+    // rows past the level's last: their reflection (bottom walks only; none
+    // for a step past the walk's end, whose word is not stored)
+    let inside = min(select(0u, h - (y + 4u), h > y + 4u), 4u);
+    var past = select(0u, 0xfu & ~((1u << inside) - 1u), y < end);
+    while (past != 0u) {
+        let k = firstTrailingBit(past);
+        past &= past - 1u;
+        let v = tmp_row(l, x, reflected(i32(y + 4u + k), i32(h)));
+        b4 = select(b4, v, k == 0u);
+        b5 = select(b5, v, k == 1u);
+        b6 = select(b6, v, k == 2u);
+        b7 = select(b7, v, k == 3u);
     }
+    let r = *a;
+    let word = smoothed_row(r.r0, r.r1, r.r2, r.r3, r.r4, r.r5, r.r6, y, end)
+        | smoothed_row(r.r1, r.r2, r.r3, r.r4, r.r5, r.r6, b4, y + 1u, end)
+        | smoothed_row(r.r2, r.r3, r.r4, r.r5, r.r6, b4, b5, y + 2u, end)
+        | smoothed_row(r.r3, r.r4, r.r5, r.r6, b4, b5, b6, y + 3u, end);
+    *a = Rows7(r.r4, r.r5, r.r6, b4, b5, b6, b7);
+    *st = select(*st, vec2<u32>(pk_word(l, x, y), word), y < end);
+    smoothed[(*st).x] = (*st).y;
 }
