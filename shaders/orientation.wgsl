@@ -24,8 +24,8 @@ const UMAX: array<i32, 16> = array<i32, 16>(15, 15, 15, 15, 14, 14, 14, 13, 13, 
 // pixels of the 31x31 square with |u| <= UMAX[|v|]): lane k < 62 takes column
 // u = k % 31 - 15 and half of its rows (v <= 0 for k < 31, v > 0 after). The
 // disc is symmetric about its diagonal (src/spec/angle.rs tests it), so column
-// u holds the rows |v| <= UMAX[|u|]: a range, which the lane walks a packed
-// word (four rows) per iteration, all of it unconditionally. Reads clamp (the
+// u holds the rows |v| <= UMAX[|u|]: a range, which the lane takes a packed
+// word (four rows) at a time, all of it unconditionally. Reads clamp (the
 // CPU's border branch, which its test shows equal to the interior one): rows
 // above the level read row 0 and rows below it row h - 1, added apart. The
 // whole sums are below 2^21 in magnitude.
@@ -41,15 +41,18 @@ fn moments_part(l: u32, x: i32, y: i32, lane: u32) -> vec2<i32> {
     // the rows of the level, each once: sum of p and of v p
     let r0 = max(y + v0, 0);
     let r1 = min(y + v1, h - 1);
-    var s = 0;
-    var sv = 0;
-    for (var k = r0 & ~3; k <= r1; k += 4) {
-        let rows = vec4<i32>(k) + vec4<i32>(0, 1, 2, 3);
-        let inside = (rows >= vec4<i32>(r0)) & (rows <= vec4<i32>(r1));
-        let p = select(vec4<i32>(0), vec4<i32>(pk_rows(gray[pk_word(l, cx, u32(k))])), inside);
-        s += p.x + p.y + p.z + p.w;
-        sv += dot(p, rows - vec4<i32>(y));
-    }
+    // at most 16 rows: five words from r0's, written out (a loop costs a SIMD
+    // software rasteriser its masks every iteration); a word past r1 adds
+    // nothing (its load clamped into the level)
+    let k0 = r0 & ~3;
+    var acc = vec2<i32>(0);
+    acc += word_sums(l, cx, k0, r0, r1, y, h);
+    acc += word_sums(l, cx, k0 + 4, r0, r1, y, h);
+    acc += word_sums(l, cx, k0 + 8, r0, r1, y, h);
+    acc += word_sums(l, cx, k0 + 12, r0, r1, y, h);
+    acc += word_sums(l, cx, k0 + 16, r0, r1, y, h);
+    var s = acc.x;
+    var sv = acc.y;
     // rows v0 .. a1 lie above the level (read row 0), b0 .. v1 below it (row h - 1)
     let a1 = min(v1, -y - 1);
     if (a1 >= v0) {
@@ -66,6 +69,15 @@ fn moments_part(l: u32, x: i32, y: i32, lane: u32) -> vec2<i32> {
         sv += (n * (b0 + v1) / 2) * p;
     }
     return vec2(u * s, sv);
+}
+
+// Rows k .. k + 3 (k a multiple of 4) of column cx that lie in [r0, r1]: the
+// sums of p and of (row - y) p.
+fn word_sums(l: u32, cx: u32, k: i32, r0: i32, r1: i32, y: i32, h: i32) -> vec2<i32> {
+    let rows = vec4<i32>(k) + vec4<i32>(0, 1, 2, 3);
+    let inside = (rows >= vec4<i32>(r0)) & (rows <= vec4<i32>(r1));
+    let p = select(vec4<i32>(0), vec4<i32>(pk_rows(gray[pk_word(l, cx, u32(min(k, h - 1)))])), inside);
+    return vec2<i32>(p.x + p.y + p.z + p.w, dot(p, rows - vec4<i32>(y)));
 }
 
 // 0 for directions in [0°, 180°), 1 for [180°, 360°); (0, 0) counts as 0°.
