@@ -27,12 +27,17 @@ fn unorm_byte(v: f32) -> u32 { return u32(round(clamp(v, 0.0, 1.0) * 255.0)); }
 fn from_bytes(@builtin(global_invocation_id) id: vec3<u32>) {
     let y0 = id.y * 4u;
     if (id.x >= lw(0u) || y0 >= lh(0u)) { return; }
-    var word = 0u;
-    for (var y = y0; y < min(y0 + 4u, lh(0u)); y++) {
-        let i = y * lw(0u) + id.x;
-        word |= pk_place((input[i / 4u] >> (8u * (i % 4u))) & 255u, y);
-    }
+    // the four rows written out (a loop costs a SIMD software rasteriser its
+    // masks every iteration); rows past the last read it again, and add 0
+    let word = input_row(id.x, y0) | input_row(id.x, y0 + 1u) | input_row(id.x, y0 + 2u) | input_row(id.x, y0 + 3u);
     gray[pk_word(0u, id.x, y0)] = word;
+}
+
+// Byte (x, y) of the row-major input in its place in the packed word, 0 for
+// y past the last row.
+fn input_row(x: u32, y: u32) -> u32 {
+    let i = min(y, lh(0u) - 1u) * lw(0u) + x;
+    return select(0u, pk_place((input[i >> 2u] >> (8u * (i & 3u))) & 255u, y), y < lh(0u));
 }
 
 @compute @workgroup_size(16, 16, 1)
