@@ -19,7 +19,8 @@
 // see tile_column), in this order:
 //   merge        union of each active pixel with its active left, up-left,
 //                up and up-right neighbours (the other four see it as theirs),
-//                as few of them as keep the components (see merge)
+//                as few of them as keep the components, made between the
+//                tops of the walks' vertical runs (see merge)
 //   compress     per vertical run of a walk: labels[top] = root of the top,
 //                and bit `root` of flags set if the run holds a STRONG pixel
 //                (`flags` is cleared by the pass's prepare)
@@ -130,13 +131,20 @@ fn words3(l: u32, x: u32, ty: u32) -> vec3<u32> {
 //   active: UR is no neighbour of L or UL.
 // Every union made joins two 8-neighbours and every 8-neighbour pair ends up
 // joined, so the trees are the 8-connected components, as with all four unions.
-// Each invocation reads the `ruled` words of columns x-1, x, x+1 of its tile
-// and of the tile above (six loads, unconditional), takes every row's
-// decision at once in bit operations, and makes the unions in a loop over
-// the rows that have any. A SIMD software
-// rasteriser runs a branch's body for every lane of the group (masked), so the
-// unions in the walk cost 16 times per column; compacted, they cost as many
-// times as the busiest lane of the group has pixels to join.
+//
+// Unions are made between *run tops*, not pixels: a walk's vertical run of
+// active pixels (16 rows of a tile column) is one component, represented by
+// its top, and every union (p, q) above becomes (top(p), top(q)). A pixel
+// under an active one (U active, in its run) then has nothing to do: its
+// union with U is the run itself. compress and final_edges read the tops'
+// labels only, so no other pixel's label is ever written or read. The tops
+// of the neighbours' runs come from the `ruled` bit words of columns x-1, x,
+// x+1 of the walk's tile and the tile above (six loads, unconditional); every
+// row's decision is taken at once in bit operations, and the unions are made
+// in a loop over the rows that have any. A SIMD software rasteriser runs a
+// branch's body for every lane of the group (masked), so the unions in the
+// walk cost 16 times per column; compacted, they cost as many times as the
+// busiest lane of the group has tops to join.
 @compute @workgroup_size(64, 1, 1)
 fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
@@ -145,37 +153,58 @@ fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     let w = lw(l);
     let ty = c.y / TILE;
     // the walk's active rows of columns x-1, x, x+1 (bit r = row c.y + r;
-    // rows past the level's last are clear), and the row above it (bit 15 of
-    // the tile row above; none above row 0)
+    // rows past the level's last are clear), and those of the walk above
+    // (none above row 0)
     let cols = words3(l, c.x, ty) & vec3<u32>(0xffffu);
-    let above = select(vec3<u32>(0u), (words3(l, c.x, max(ty, 1u) - 1u) >> vec3<u32>(15u)) & vec3<u32>(1u), ty > 0u);
+    let prev = select(vec3<u32>(0u), words3(l, c.x, max(ty, 1u) - 1u) & vec3<u32>(0xffffu), ty > 0u);
+    let above = prev >> vec3<u32>(15u);
     // every row's neighbours at once, as bits: up-left, up, up-right
     let ups = ((cols << vec3<u32>(1u)) | above) & vec3<u32>(0xffffu);
     let act = cols.y;
-    // the decision tree, row by row in parallel: U alone when active; else L,
-    // else UL, and UR as a second union
-    let by_u = act & ups.y;
+    // the decision tree, row by row in parallel: U alone when active (a
+    // union only at row 0, U in the walk above; below, U is the same run);
+    // else L, else UL, and UR as a second union
+    let by_u = act & ups.y & 1u;
     let by_l = act & ~ups.y & cols.x;
     let by_ul = act & ~ups.y & ~cols.x & ups.x;
     let ur = act & ~ups.y & ups.z;
     var rows = by_u | by_l | by_ul | ur;
-    // the first rows of the walk's vertical runs of active pixels
-    let tops = act & ~(act << 1u);
+    // the first rows of the vertical runs of this walk and the one above
+    let tops = cols & ~(cols << vec3<u32>(1u));
+    let tops_above = prev & ~(prev << vec3<u32>(1u));
+    // atlas index of row 0 of this walk at column x - 1
+    let row0 = loff(l) + c.y * w + c.x - 1u;
     while (rows != 0u) {
         let r = countTrailingZeros(rows);
         rows &= rows - 1u;
-        let i = loff(l) + (c.y + r) * w + c.x;
         let bit = 1u << r;
-        // U active: the top of the vertical run in this walk holding it (the
-        // same component, one link instead of a chain down the run), or U
-        // itself when the run comes from the walk above
-        let r0 = firstLeadingBit(tops & ((2u << r) - 1u));
-        let up_link = select(i - w, i - (r - r0) * w, r0 < r);
+        let i = row0 + r * w + 1u;
+        // U: the top of U's run in the walk above (row 0 only)
+        let u_top = row_of_top(tops_above.y, 15u) - 16;
+        // L: the top of L's run, same walk, at or above row r
+        let l_top = row_of_top(tops.x, r);
+        // UL, UR: the top of the run holding row r - 1 of column x -+ 1, in
+        // this walk or (r = 0) the walk above
+        let ul_top = select(row_of_top(tops_above.x, 15u) - 16, row_of_top(tops.x, r - 1u), r > 0u);
+        let ur_top = select(row_of_top(tops_above.z, 15u) - 16, row_of_top(tops.z, r - 1u), r > 0u);
         if (((by_u | by_l | by_ul) & bit) != 0u) {
-            link(i, select(select(i - w - 1u, i - 1u, (by_l & bit) != 0u), up_link, (by_u & bit) != 0u));
+            let t = select(select(at(row0, w, ul_top, 0u), at(row0, w, l_top, 0u), (by_l & bit) != 0u), at(row0, w, u_top, 1u), (by_u & bit) != 0u);
+            link(i, t);
         }
-        if ((ur & bit) != 0u) { link(i, i - w + 1u); }
+        if ((ur & bit) != 0u) { link(i, at(row0, w, ur_top, 2u)); }
     }
+}
+
+// The row (of the walk, bit r of `tops`) of the top of the run holding row r:
+// the last top at or above r.
+fn row_of_top(tops: u32, r: u32) -> i32 {
+    return i32(firstLeadingBit(tops & ((2u << r) - 1u)));
+}
+
+// Atlas index of walk row `row` (-16 .. 15: negative in the walk above) of
+// column x - 1 + dx, from `row0` (row 0, column x - 1) and the level width w.
+fn at(row0: u32, w: u32, row: i32, dx: u32) -> u32 {
+    return u32(i32(row0) + row * i32(w)) + dx;
 }
 
 fn compress_px(i: u32, strong: bool) {
@@ -202,11 +231,10 @@ fn run_mask(act: u32, r0: u32) -> u32 {
 }
 
 // Compacted as merge, and per vertical run of the walk rather than per pixel:
-// merge linked each pixel of a run below its top to the top, so the run is
-// one component; its top's root is every pixel's. A loop over the runs'
-// tops: the top's label becomes its root, and the root is marked when any
-// pixel of the run is STRONG. (The other pixels keep their link to the top,
-// one step from the root: final_edges reads the tops only.)
+// merge united runs through their tops, so a run is one component and its
+// top's root is every pixel's. A loop over the runs' tops: the top's label
+// becomes its root, and the root is marked when any pixel of the run is
+// STRONG. (The other pixels have no label: final_edges reads the tops only.)
 @compute @workgroup_size(64, 1, 1)
 fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = column_span(wg, li);
