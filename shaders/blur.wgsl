@@ -147,11 +147,12 @@ fn vertical(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) 
     a.r6 = tmp_row(l, x, reflected(y0 + 3, ih));
     // the walk's four words (TILE rows), written out: a loop costs a SIMD
     // software rasteriser its masks every iteration
+    let c = VColumn(l, x, lw(l), h, loff(l) + x, span.z);
     var st = vec2<u32>(0u);
-    vstep(&a, l, x, span.y, span.z, &st);
-    vstep(&a, l, x, span.y + 4u, span.z, &st);
-    vstep(&a, l, x, span.y + 8u, span.z, &st);
-    vstep(&a, l, x, span.y + 12u, span.z, &st);
+    vstep(&a, c, span.y, &st);
+    vstep(&a, c, span.y + 4u, &st);
+    vstep(&a, c, span.y + 8u, &st);
+    vstep(&a, c, span.y + 12u, &st);
 }
 
 // blur_tmp rows y - 3 .. y + 3 of a walk's column.
@@ -165,15 +166,29 @@ struct Rows7 {
     r6: u32,
 }
 
+// A vertical walk's column x of level l: the level's width and height, the
+// column's atlas index in row 0 of `blur_tmp`, the walk's end row.
+struct VColumn {
+    l: u32,
+    x: u32,
+    w: u32,
+    h: u32,
+    col: u32,
+    end: u32,
+}
+
 // The word of `smoothed` of rows y .. y + 3 of column x (a: blur_tmp rows
 // y - 3 .. y + 3, moved down four rows); `st` is the last store (index,
 // word), stored again when y is past the walk's end (a level's last,
 // partial tile): no store under `if`.
-fn vstep(a: ptr<function, Rows7>, l: u32, x: u32, y: u32, end: u32, st: ptr<function, vec2<u32>>) {
-    let h = lh(l);
-    let w = lw(l);
+fn vstep(a: ptr<function, Rows7>, c: VColumn, y: u32, st: ptr<function, vec2<u32>>) {
+    let l = c.l;
+    let x = c.x;
+    let h = c.h;
+    let w = c.w;
+    let end = c.end;
     let last_pair = (h - 1u) >> 1u;
-    let col = loff(l) + x;
+    let col = c.col;
     let p = blur_tmp[col + min((y + 4u) >> 1u, last_pair) * w];
     let q = blur_tmp[col + min((y + 6u) >> 1u, last_pair) * w];
     var b4 = p & 0xffffu;

@@ -73,14 +73,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let vt = v3_of(win0, g.x, i, jt);
     let vb = v3_of(win0, g.x, i, jb);
     // the walk's four words (TILE rows), written out: a loop costs a SIMD
-    // software rasteriser its masks every iteration. A word past the walk's
-    // end (a level's last, partial tile) is its last word again, stored again.
-    let lastw = last & ~3u;
+    // software rasteriser its masks every iteration (common.wgsl walk_word)
     let k = Walk(l, span.x, rows, t1, win0, g.x, i, jt, jb, vt, vb);
-    step(k, min(span.y, lastw));
-    step(k, min(span.y + 4u, lastw));
-    step(k, min(span.y + 8u, lastw));
-    step(k, min(span.y + 12u, lastw));
+    step(k, walk_word(span.y, span.z, 0u));
+    step(k, walk_word(span.y, span.z, 1u));
+    step(k, walk_word(span.y, span.z, 2u));
+    step(k, walk_word(span.y, span.z, 3u));
 }
 
 // What every word of a walk needs: level, column, the row windows' offset in

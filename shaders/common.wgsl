@@ -152,6 +152,15 @@ fn column_span(wg: vec3<u32>, li: vec3<u32>) -> vec4<u32> {
     return vec4<u32>(id.x, id.y, min(id.y + TILE, lh(id.z)), id.z);
 }
 
+// The first row of word k (rows 4k .. 4k + 3 of the walk) of a walk over rows
+// [y0, end), y0 a multiple of 4; a word past the walk's end (a level's last,
+// partial tile) is its last word again. Walks write their (at most four)
+// words out rather than loop, and a repeated word is stored again at its own
+// place: no store under `if`, none in the next level.
+fn walk_word(y0: u32, end: u32, k: u32) -> u32 {
+    return min(y0 + 4u * k, (end - 1u) & ~3u);
+}
+
 // Column-packed 8-bit planes (`classes`, `ruled`; FrameLayout::packed_offsets,
 // gpu::layout::pack_level): word (y / 4) * w + x of level l holds rows
 // 4 (y / 4) .. + 4 of column x, row y in bits 8 (y % 4) .. + 8. A column walk

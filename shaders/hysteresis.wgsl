@@ -174,21 +174,22 @@ fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     let tops_above = prev & ~(prev << vec3<u32>(1u));
     // atlas index of row 0 of this walk at column x - 1
     let row0 = loff(l) + c.y * w + c.x - 1u;
+    // the tops of the runs holding the last row of the walk above (rows
+    // -16 .. -1 of this walk), columns x-1, x, x+1
+    let up_tops = vec3<i32>(row_of_top(tops_above.x, 15u), row_of_top(tops_above.y, 15u), row_of_top(tops_above.z, 15u)) - vec3<i32>(16);
     while (rows != 0u) {
         let r = countTrailingZeros(rows);
         rows &= rows - 1u;
         let bit = 1u << r;
         let i = row0 + r * w + 1u;
-        // U: the top of U's run in the walk above (row 0 only)
-        let u_top = row_of_top(tops_above.y, 15u) - 16;
         // L: the top of L's run, same walk, at or above row r
         let l_top = row_of_top(tops.x, r);
         // UL, UR: the top of the run holding row r - 1 of column x -+ 1, in
-        // this walk or (r = 0) the walk above
-        let ul_top = select(row_of_top(tops_above.x, 15u) - 16, row_of_top(tops.x, r - 1u), r > 0u);
-        let ur_top = select(row_of_top(tops_above.z, 15u) - 16, row_of_top(tops.z, r - 1u), r > 0u);
+        // this walk or (r = 0) the walk above; U only at row 0 (up_tops.y)
+        let ul_top = select(up_tops.x, row_of_top(tops.x, r - 1u), r > 0u);
+        let ur_top = select(up_tops.z, row_of_top(tops.z, r - 1u), r > 0u);
         if (((by_u | by_l | by_ul) & bit) != 0u) {
-            let t = select(select(at(row0, w, ul_top, 0u), at(row0, w, l_top, 0u), (by_l & bit) != 0u), at(row0, w, u_top, 1u), (by_u & bit) != 0u);
+            let t = select(select(at(row0, w, ul_top, 0u), at(row0, w, l_top, 0u), (by_l & bit) != 0u), at(row0, w, up_tops.y, 1u), (by_u & bit) != 0u);
             link(i, t);
         }
         if ((ur & bit) != 0u) { link(i, at(row0, w, ur_top, 2u)); }
@@ -266,13 +267,11 @@ fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_i
     }
     // `edges` is column-packed as `ruled`: bit r of e -> 255 at row c.y + r.
     // The walk's four words written out (a loop costs a SIMD software
-    // rasteriser its masks every iteration); past the walk's end the last
-    // word again, at its place.
-    let last = (c.z - 1u) & ~3u;
-    store_edges(c, e, min(c.y, last));
-    store_edges(c, e, min(c.y + 4u, last));
-    store_edges(c, e, min(c.y + 8u, last));
-    store_edges(c, e, min(c.y + 12u, last));
+    // rasteriser its masks every iteration; common.wgsl walk_word).
+    store_edges(c, e, walk_word(c.y, c.z, 0u));
+    store_edges(c, e, walk_word(c.y, c.z, 1u));
+    store_edges(c, e, walk_word(c.y, c.z, 2u));
+    store_edges(c, e, walk_word(c.y, c.z, 3u));
 }
 
 // The word of `edges` of rows y .. y + 3 of walk c from its edge rows e.
