@@ -11,9 +11,11 @@
 //   dispatch (most cells along x, along y, n_levels); it counts the cell in
 //   workgroup memory and adds each bin to every window holding the cell and
 //   to the level's histogram.
-//   32 invocations: a cell averages ~500 pixels (KITTI, 8 levels), and with
-//   one invocation per bin (256) the per-workgroup cost dominated on lavapipe
-//   (57 -> 35 ms per frame with 32).
+//   CELL_INVOCATIONS (8) invocations: a KITTI cell is ~120x40 pixels at
+//   level 0 and ~30x10 at level 7, so a few columns each. Workgroup-wide
+//   work (the windows holding the cell, the barrier, the bins' walk) costs
+//   every SIMD group of a workgroup on lavapipe: one invocation per bin
+//   (256) took 57 ms per frame, 32 took 8.8 ms, 8 (one SIMD group) 7.2.
 // - stats: one workgroup per window, workgroup_id = (i, j, level), dispatch
 //   (max nx, max ny, n_levels): stats_of over the window's histogram.
 // Groups beyond a level's cells or windows return at once. `window_hist` and
@@ -77,7 +79,10 @@ fn flush_small(c0: ptr<function, vec4<u32>>, c1: ptr<function, vec4<u32>>) {
     *c1 = zero;
 }
 
-@compute @workgroup_size(32, 1, 1)
+// Invocations of a `cells` workgroup (its columns' stride, its bins' stride).
+const CELL_INVOCATIONS: u32 = 8u;
+
+@compute @workgroup_size(8, 1, 1)
 fn cells(
     @builtin(local_invocation_index) li: u32,
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -99,7 +104,7 @@ fn cells(
         let wy = holding(g.z + g.x, g.y, g.w >> 16u, y0, y1);
         win = vec4<u32>(wx, wy);
     }
-    // Columns li, li + 32, ... of the cell, each down its rows a word (four
+    // Columns li, li + 8, ... of the cell, each down its rows a word (four
     // rows, `m` is column-packed) at a time. Values below 32 (~95% of the
     // pixels of a KITTI frame) are counted in registers, 8-bit counters four
     // a word (count_small), and added to the workgroup's bins when a counter
@@ -112,7 +117,7 @@ fn cells(
     // pixels counted in registers since the last flush (a word adds <= 4, so
     // an `if` empties them in time: a `while` costs its loop masks every word)
     var pending = 0u;
-    for (var x = x0 + li; x < x1; x += 32u) {
+    for (var x = x0 + li; x < x1; x += CELL_INVOCATIONS) {
         for (var g4 = y0 >> 2u; g4 * 4u < y1; g4++) {
             if (pending > 251u) {
                 flush_small(&c0, &c1);
@@ -141,14 +146,15 @@ fn cells(
     flush_small(&c0, &c1);
     workgroupBarrier();
     let r = win;
-    // bins li, li + 32, ...: the non-empty ones as bits, added in a `while`
+    // bins li, li + 8, ...: the non-empty ones as bits, added in a `while`
     // loop (most of a small or flat cell's bins are empty)
+    // (256 / CELL_INVOCATIONS = 32 bits)
     var full = 0u;
-    for (var q = 0u; q < 8u; q++) {
-        full |= select(0u, 1u << q, atomicLoad(&bins[li + 32u * q]) != 0u);
+    for (var q = 0u; q < 256u / CELL_INVOCATIONS; q++) {
+        full |= select(0u, 1u << q, atomicLoad(&bins[li + CELL_INVOCATIONS * q]) != 0u);
     }
     while (full != 0u) {
-        let k = li + 32u * firstTrailingBit(full);
+        let k = li + CELL_INVOCATIONS * firstTrailingBit(full);
         full &= full - 1u;
         let c = atomicLoad(&bins[k]);
         atomicAdd(&hist[l * 256u + k], c);
@@ -166,9 +172,9 @@ var<workgroup> lo_inv: atomic<u32>;
 var<workgroup> hi_1: atomic<u32>;
 var<workgroup> part: array<u32, 16>;
 
-// 32 invocations, as cells: with one per bin the workgroups' own cost
-// dominated on lavapipe.
-@compute @workgroup_size(32, 1, 1)
+// 8 invocations (one SIMD group of lavapipe), as cells: 32 took 0.3 ms more
+// per KITTI frame there.
+@compute @workgroup_size(8, 1, 1)
 fn stats(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let l = wg.z;
     let g = P.grids[l];
@@ -179,27 +185,27 @@ fn stats(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: ve
     // Workgroup-uniform: the barriers below are reached by all or none.
     if (l >= P.n_levels || i >= nx || j >= ny) { return; }
     let base = (P.levels[l].w + j * nx + i) * 256u;
-    // bins li, li + 32, ... into workgroup memory; this invocation's lowest
-    // non-empty bin and 1 + its highest (0: none)
+    // runs 2 li and 2 li + 1 of 16 bins into workgroup
+    // memory; this invocation's lowest non-empty bin and 1 + its highest (0: none)
     var lo = 256u;
     var hi = 0u;
-    for (var k = li; k < 256u; k += 32u) {
-        let c = atomicLoad(&window_hist[base + k]);
-        atomicStore(&bins[k], c);
-        if (c != 0u) {
-            lo = min(lo, k);
-            hi = k + 1u;
+    for (var r = 2u * li; r < 2u * li + 2u; r++) {
+        var sum = 0u;
+        for (var q = 0u; q < 16u; q++) {
+            let k = r * 16u + q;
+            let c = atomicLoad(&window_hist[base + k]);
+            atomicStore(&bins[k], c);
+            sum += c;
+            if (c != 0u) {
+                lo = min(lo, k);
+                hi = k + 1u;
+            }
         }
+        part[r] = sum;
     }
     if (hi != 0u) {
         atomicMax(&lo_inv, 256u - lo);
         atomicMax(&hi_1, hi);
-    }
-    workgroupBarrier();
-    if (li < 16u) {
-        var sum = 0u;
-        for (var k = 0u; k < 16u; k++) { sum += atomicLoad(&bins[li * 16u + k]); }
-        part[li] = sum;
     }
     workgroupBarrier();
     if (li == 0u) {
