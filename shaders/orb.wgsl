@@ -1,8 +1,11 @@
 // SPEC 11: the rBRIEF descriptor on the smoothed level. Mirrors
-// src/cpu/orb.rs (`describe`, `describe_continuous`). One workgroup of 64
+// src/cpu/orb.rs (`describe`, `describe_continuous`). One workgroup of 8
 // invocations per final keypoint, dispatched indirectly
-// (indirect::KEYPOINT_GROUPS: keypoint = wg.y * 65535 + wg.x); invocation t
-// makes pairs 4t..4t+3 and ORs them into word t / 8 in workgroup memory.
+// (indirect::KEYPOINT_GROUPS: keypoint = wg.y * 65535 + wg.x); invocation k
+// makes word k, pairs 32k..32k+31, and stores it: no workgroup memory, no
+// barrier. (64 invocations of four pairs each, OR-ed into workgroup memory
+// between two barriers, took 2.2 ms per KITTI frame on lavapipe, where every
+// SIMD group of 8 of a workgroup with a barrier is a coroutine; this 1.4.)
 // Descriptor i is descriptors[8i .. 8i+8]: bit b of word k is pair 32k + b,
 // so (little-endian) bit i of byte j is pair 8j + i and the buffer's bytes
 // are the [u8; 32] descriptors.
@@ -17,8 +20,8 @@ const PI: f32 = 3.14159265358979323846;
 @group(0) @binding(3) var<storage, read> counters: array<u32>;
 // Per bin 256 pairs (x1, y1, x2, y2), pre-rotated to the bin's centre; with
 // orientation_bins = 0 the one unrotated table.
-// One word per pair: x1, y1, x2, y2 as i8 bytes, lowest first; an
-// invocation's four pairs are one vec4 (one load rather than sixteen).
+// One word per pair: x1, y1, x2, y2 as i8 bytes, lowest first; four pairs
+// are one vec4 (one load rather than sixteen).
 @group(0) @binding(4) var<storage, read> patterns: array<vec4<u32>>;
 
 // The pair (x1, y1, x2, y2) of a `patterns` word.
@@ -42,29 +45,17 @@ fn rotate(p: vec4<i32>, c: f32, s: f32) -> vec4<i32> {
     return vec4<i32>(round(vec4(f.x * c - f.y * s, f.x * s + f.y * c, f.z * c - f.w * s, f.z * s + f.w * c)));
 }
 
-var<workgroup> words: array<atomic<u32>, 8>;
-
-@compute @workgroup_size(64, 1, 1)
+@compute @workgroup_size(8, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     let i = wg.y * 65535u + wg.x;
-    // No early return before the barriers (they need uniform control flow):
-    // `ok` guards the work instead.
-    var kp: Kp;
-    var ok = false;
-    if (i < counters[KEYPOINTS] && i < P.capacity) {
-        kp = keypoints[i];
-        ok = kp.level < P.n_levels;
-    }
-    if (lane < 8u) { atomicStore(&words[lane], 0u); }
-    workgroupBarrier();
-    if (ok) { describe_part(kp, lane); }
-    workgroupBarrier();
-    if (ok && lane < 8u) { descriptors[8u * i + lane] = atomicLoad(&words[lane]); }
+    if (i >= counters[KEYPOINTS] || i >= P.capacity) { return; }
+    let kp = keypoints[i];
+    if (kp.level >= P.n_levels) { return; }
+    descriptors[8u * i + lane] = describe_word(kp, lane);
 }
 
-// Invocation `lane`'s pairs 4 lane .. 4 lane + 3 of keypoint kp's descriptor,
-// OR-ed into their word.
-fn describe_part(kp: Kp, lane: u32) {
+// Word k of keypoint kp's descriptor: pairs 32 k .. 32 k + 31.
+fn describe_word(kp: Kp, k: u32) -> u32 {
     let l = kp.level;
     let x = i32(kp.px);
     let y = i32(kp.py);
@@ -73,11 +64,14 @@ fn describe_part(kp: Kp, lane: u32) {
     let a = kp.angle * (PI / 180.0);
     let s = sin(a);
     let c = cos(a);
-    let four = patterns[(base >> 2u) + lane];
-    let bits = pair_bit(four.x, l, x, y, c, s, continuous) | (pair_bit(four.y, l, x, y, c, s, continuous) << 1u)
-        | (pair_bit(four.z, l, x, y, c, s, continuous) << 2u) | (pair_bit(four.w, l, x, y, c, s, continuous) << 3u);
-    // pairs 4 lane .. 4 lane + 3 are bits 4 (lane % 8) .. of word lane / 8
-    atomicOr(&words[lane / 8u], bits << (4u * (lane % 8u)));
+    var word = 0u;
+    for (var q = 0u; q < 8u; q++) {
+        let four = patterns[(base >> 2u) + 8u * k + q];
+        let bits = pair_bit(four.x, l, x, y, c, s, continuous) | (pair_bit(four.y, l, x, y, c, s, continuous) << 1u)
+            | (pair_bit(four.z, l, x, y, c, s, continuous) << 2u) | (pair_bit(four.w, l, x, y, c, s, continuous) << 3u);
+        word |= bits << (4u * q);
+    }
+    return word;
 }
 
 // The bit of one pair (its `patterns` word w) of the keypoint at (x, y) of

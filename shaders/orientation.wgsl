@@ -1,9 +1,11 @@
 // SPEC 11: keypoint orientation by the intensity centroid, and its bin.
 // Mirrors src/cpu/orientation.rs (`moments`, `AngleBins::bin_of`, `angle_deg`).
-// One workgroup of 64 invocations per final keypoint, dispatched indirectly
+// One workgroup of 8 invocations per final keypoint, dispatched indirectly
 // (indirect::KEYPOINT_GROUPS: keypoint = wg.y * 65535 + wg.x); the invocations
-// share the disc's pixels and add their integer sums in workgroup atomics
-// (exact, so the order does not matter). The moments are exact integers on
+// share the disc's 62 half columns (moments_part) and add their integer sums
+// in workgroup atomics (exact, so the order does not matter). 64 invocations,
+// one half column each, took 2.3 ms per KITTI frame on lavapipe (every SIMD
+// group of 8 of a workgroup with a barrier is a coroutine there); 8 took 1.5. The moments are exact integers on
 // the *unsmoothed* level; the angle is an f32 approximation (the host
 // recomputes it exactly from m10, m01).
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/orientation.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -20,19 +22,18 @@ const UMAX: array<i32, 16> = array<i32, 16>(15, 15, 15, 15, 14, 14, 14, 13, 13, 
 // Per bin the Q8 direction (cos, sin) of its upper boundary (AngleBins::bounds).
 @group(0) @binding(4) var<storage, read> angle_bounds: array<vec2<i32>>;
 
-// This invocation's share of (m10, m01) over the disc around (x, y) (those
-// pixels of the 31x31 square with |u| <= UMAX[|v|]): lane k < 62 takes column
+// Half column k's share of (m10, m01) over the disc around (x, y) (those
+// pixels of the 31x31 square with |u| <= UMAX[|v|]): k < 62 is column
 // u = k % 31 - 15 and half of its rows (v <= 0 for k < 31, v > 0 after). The
 // disc is symmetric about its diagonal (src/spec/angle.rs tests it), so column
-// u holds the rows |v| <= UMAX[|u|]: a range, which the lane takes a packed
+// u holds the rows |v| <= UMAX[|u|]: a range, which is taken a packed
 // word (four rows) at a time, all of it unconditionally. Reads clamp (the
 // CPU's border branch, which its test shows equal to the interior one): rows
 // above the level read row 0 and rows below it row h - 1, added apart. The
 // whole sums are below 2^21 in magnitude.
-fn moments_part(l: u32, x: i32, y: i32, lane: u32) -> vec2<i32> {
-    if (lane >= 62u) { return vec2(0, 0); }
-    let u = i32(lane % 31u) - HALF_PATCH;
-    let top = lane < 31u;
+fn moments_part(l: u32, x: i32, y: i32, k: u32) -> vec2<i32> {
+    let u = i32(k % 31u) - HALF_PATCH;
+    let top = k < 31u;
     let vm = UMAX[abs(u)];
     let v0 = select(1, -vm, top);
     let v1 = select(vm, 0, top);
@@ -124,7 +125,7 @@ fn angle_deg(m: vec2<i32>) -> f32 {
 var<workgroup> sum10: atomic<i32>;
 var<workgroup> sum01: atomic<i32>;
 
-@compute @workgroup_size(64, 1, 1)
+@compute @workgroup_size(8, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     let i = wg.y * 65535u + wg.x;
     // No early return before the barriers (they need uniform control flow):
@@ -144,7 +145,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
     }
     workgroupBarrier();
     if (ok) {
-        let part = moments_part(level, i32(kx), i32(ky), lane);
+        // half columns lane, lane + 8, ... (< 62)
+        var part = vec2<i32>(0);
+        for (var k = lane; k < 62u; k += 8u) {
+            part += moments_part(level, i32(kx), i32(ky), k);
+        }
         atomicAdd(&sum10, part.x);
         atomicAdd(&sum01, part.y);
     }
