@@ -152,6 +152,61 @@ fn column_span(wg: vec3<u32>, li: vec3<u32>) -> vec4<u32> {
     return vec4<u32>(id.x, id.y, min(id.y + TILE, lh(id.z)), id.z);
 }
 
+// Quad passes (workgroup_size(64, 1, 1), FrameLayout::quad_groups): a
+// workgroup serves QUAD_TILES consecutive tiles of the list, four invocations
+// per tile, and each invocation walks four neighbouring columns x0 .. x0 + 3
+// (x0 a multiple of 4) down the tile's rows. A 3-column stencil then reads
+// six columns' words per word of rows for four outputs, where a column walk
+// reads three for one: storage reads are what a SIMD software rasteriser
+// pays for (docs/gpu.md). Returns (x0, top row, end row, level); no rows
+// (end = top) past the last tile or the level's right edge.
+const QUAD_TILES: u32 = 16u;
+fn quad_span(wg: vec3<u32>, li: vec3<u32>) -> vec4<u32> {
+    let o = tile_origin((wg.x + wg.y * P.tile_row) * QUAD_TILES + li.x / 4u);
+    if (o.x == NO_TILE) { return vec4<u32>(0u); }
+    let x0 = o.x + 4u * (li.x % 4u);
+    if (x0 >= lw(o.z)) { return vec4<u32>(0u); }
+    return vec4<u32>(x0, o.y, min(o.y + TILE, lh(o.z)), o.z);
+}
+
+// Six neighbouring columns' words, bytes or indices in a quad walk: columns
+// x0 - 1 .. x0 + 2 in `a`, x0 + 3 and x0 + 4 in `b`.
+struct Six {
+    a: vec4<u32>,
+    b: vec2<u32>,
+}
+
+// Columns x0 - 1 .. x0 + 4 clamped into a level of width w.
+fn six_columns(x0: u32, w: u32) -> Six {
+    let wm = w - 1u;
+    return Six(
+        min(vec4<u32>(max(x0, 1u) - 1u, x0, x0 + 1u, x0 + 2u), vec4<u32>(wm)),
+        min(vec2<u32>(x0 + 3u, x0 + 4u), vec2<u32>(wm)),
+    );
+}
+
+// Columns x0 + k - 1, x0 + k, x0 + k + 1 of a Six: output column k's
+// neighbourhood (k constant at every call, so the switch folds away).
+fn tri(s: Six, k: u32) -> vec3<u32> {
+    switch k {
+        case 0u: { return s.a.xyz; }
+        case 1u: { return s.a.yzw; }
+        case 2u: { return vec3<u32>(s.a.zw, s.b.x); }
+        default: { return vec3<u32>(s.a.w, s.b); }
+    }
+}
+
+// Row y's bytes of six columns' words (pk_byte of each).
+fn six_bytes(s: Six, y: u32) -> Six {
+    let sh = (y & 3u) * 8u;
+    return Six((s.a >> vec4<u32>(sh)) & vec4<u32>(0xffu), (s.b >> vec2<u32>(sh)) & vec2<u32>(0xffu));
+}
+
+// `yes ? a : b` for each column.
+fn six_select(b: Six, a: Six, yes: bool) -> Six {
+    return Six(select(b.a, a.a, yes), select(b.b, a.b, yes));
+}
+
 // The first row of word k (rows 4k .. 4k + 3 of the walk) of a walk over rows
 // [y0, end), y0 a multiple of 4; a word past the walk's end (a level's last,
 // partial tile) is its last word again. Walks write their (at most four)

@@ -15,6 +15,9 @@ pub const TILE_ROW: u32 = 65535;
 pub const TILE: u32 = 16;
 /// Tiles per workgroup of a column pass (`COLUMN_TILES` in shaders/common.wgsl).
 pub const COLUMN_TILES: u32 = 4;
+/// Tiles per workgroup of a quad pass, four columns per invocation
+/// (`QUAD_TILES` in shaders/common.wgsl).
+pub const QUAD_TILES: u32 = 16;
 
 /// The uniform every pass binds at 0. Field for field as in shaders/common.wgsl.
 #[repr(C)]
@@ -233,6 +236,14 @@ impl FrameLayout {
     /// `tile_column`), in rows of at most `tile_row` workgroups.
     pub fn column_groups(&self) -> [u32; 3] {
         self.in_rows(self.params.total_tiles.div_ceil(COLUMN_TILES))
+    }
+
+    /// Workgroups of a quad pass over all levels at once: [`QUAD_TILES`] tiles
+    /// of the tile list per 64-invocation workgroup, four columns per
+    /// invocation (shaders/common.wgsl `quad_span`), in rows of at most
+    /// `tile_row` workgroups.
+    pub fn quad_groups(&self) -> [u32; 3] {
+        self.in_rows(self.params.total_tiles.div_ceil(QUAD_TILES))
     }
 
     /// `n` workgroups in rows of at most `tile_row` (the device's per-dimension limit).

@@ -15,5 +15,5 @@ simple_pass! {
         "src" = gray,
         "dst" = denoised,
     }
-    dispatch |b| Groups::Direct(b.layout.column_groups())
+    dispatch |b| Groups::Direct(b.layout.quad_groups())
 }
