@@ -3,7 +3,7 @@
 // to the CPU's fused rows (src/cpu/fused.rs, `gradient_row` and the NMS inside
 // `classify_row`), without the gx, gy and S planes: those live only in registers.
 // denoised -> m (M8 = min(M, 255)), nms (1 = survivor), both column-packed;
-// all levels in one dispatch (over the tile list). SPEC 4's histogram of M8 is
+// four columns per invocation, all levels in one dispatch (over the tile list). SPEC 4's histogram of M8 is
 // counted by local_threshold.wgsl's cells, which count every pixel anyway.
 // Tests: tests/gpu_edges_front.rs (this pass == the three staged passes and the
 // CPU) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -12,135 +12,190 @@
 @group(0) @binding(2) var<storage, read_write> m: array<u32>;
 @group(0) @binding(3) var<storage, read_write> nms: array<u32>;
 
-// D is column-packed (common.wgsl pk_word). The words of columns x-1, x,
-// x+1, x+2 holding row y, y clamped into the level (x-1 only feeds S at x-1,
-// which is 0 at x = 0 whatever it reads; x+1 and x+2 clamp to the last column).
-fn d4_words(l: u32, x: u32, y: u32) -> vec4<u32> {
+// Seven neighbouring columns' D words or values: columns x0 - 1 .. x0 + 2 in
+// `a`, x0 + 3 .. x0 + 5 in `b`.
+struct W7 {
+    a: vec4<u32>,
+    b: vec3<u32>,
+}
+struct D7 {
+    a: vec4<i32>,
+    b: vec3<i32>,
+}
+
+// D is column-packed (common.wgsl pk_word). The words of columns x0 - 1 ..
+// x0 + 5 holding row y, y clamped into the level (x0 - 1 only feeds S at
+// x0 - 1, which is 0 at x0 = 0 whatever it reads; columns past the level
+// clamp to its last).
+fn d7_words(l: u32, x0: u32, y: u32) -> W7 {
     let row = pk_word(l, 0u, min(y, lh(l) - 1u));
     let last = lw(l) - 1u;
-    return vec4<u32>(
-        denoised[row + max(x, 1u) - 1u],
-        denoised[row + x],
-        denoised[row + min(x + 1u, last)],
-        denoised[row + min(x + 2u, last)],
+    let c = min(vec4<u32>(max(x0, 1u) - 1u, x0, x0 + 1u, x0 + 2u), vec4<u32>(last));
+    let d = min(vec3<u32>(x0 + 3u, x0 + 4u, x0 + 5u), vec3<u32>(last));
+    return W7(
+        vec4<u32>(denoised[row + c.x], denoised[row + c.y], denoised[row + c.z], denoised[row + c.w]),
+        vec3<u32>(denoised[row + d.x], denoised[row + d.y], denoised[row + d.z]),
     );
 }
 
-// D of row y (clamped into the level) at the four columns, from `words`
+// D of row y (clamped into the level) at the seven columns, from `words`
 // holding it.
-fn d4_at(l: u32, words: vec4<u32>, y: u32) -> vec4<i32> {
-    return vec4<i32>(pk_byte4(words, min(y, lh(l) - 1u)));
+fn d7_at(l: u32, words: W7, y: u32) -> D7 {
+    let sh = (min(y, lh(l) - 1u) & 3u) * 8u;
+    return D7(vec4<i32>((words.a >> vec4<u32>(sh)) & vec4<u32>(0xffu)), vec3<i32>((words.b >> vec3<u32>(sh)) & vec3<u32>(0xffu)));
 }
 
-// (gx2, gy2) at columns x-1, x, x+1 from D rows y (a) and y + 1 (c): SPEC 2's
-// 2x2 differences, right and bottom neighbours clamped as in gradient.wgsl.
-fn grad3(a: vec4<i32>, c: vec4<i32>) -> array<vec2<i32>, 3> {
-    // columns k and k + 1 of rows a and c give column k's differences
-    let dx = a.yzw + c.yzw - a.xyz - c.xyz;
-    let dy = c.xyz + c.yzw - a.xyz - a.yzw;
-    return array<vec2<i32>, 3>(vec2(dx.x, dy.x), vec2(dx.y, dy.y), vec2(dx.z, dy.z));
+fn w7_select(b: W7, a: W7, yes: bool) -> W7 {
+    return W7(select(b.a, a.a, yes), select(b.b, a.b, yes));
 }
 
-// S at columns x-1, x, x+1 of a row whose gradients are `g`: 0 outside the
-// level (`valid` says which columns are inside, and whether the row is).
-fn s3(g: array<vec2<i32>, 3>, valid: vec3<bool>) -> vec3<u32> {
-    let s0 = u32(g[0].x * g[0].x + g[0].y * g[0].y);
-    let s1 = u32(g[1].x * g[1].x + g[1].y * g[1].y);
-    let s2 = u32(g[2].x * g[2].x + g[2].y * g[2].y);
-    return select(vec3<u32>(0u), vec3<u32>(s0, s1, s2), valid);
+// (gx2, gy2) at columns x0 - 1 .. x0 + 4 (gx in x, gy in y; columns x0 - 1 ..
+// x0 + 2 in `a`, x0 + 3, x0 + 4 in `b`) from D rows y (a) and y + 1 (c):
+// SPEC 2's 2x2 differences, right and bottom neighbours clamped as in
+// gradient.wgsl (column k's differences take columns k and k + 1).
+struct G6 {
+    x: Six,
+    y: Six,
+}
+fn grad6(a: D7, c: D7) -> G6 {
+    let ar = vec4<i32>(a.a.yzw, a.b.x);
+    let cr = vec4<i32>(c.a.yzw, c.b.x);
+    let dxa = ar + cr - a.a - c.a;
+    let dya = c.a + cr - a.a - ar;
+    let dxb = a.b.yz + c.b.yz - a.b.xy - c.b.xy;
+    let dyb = c.b.xy + c.b.yz - a.b.xy - a.b.yz;
+    return G6(Six(bitcast<vec4<u32>>(dxa), bitcast<vec2<u32>>(dxb)), Six(bitcast<vec4<u32>>(dya), bitcast<vec2<u32>>(dyb)));
 }
 
-// The walk's window at row yy: S of rows yy - 1 (up) and yy (mid) at columns
-// x-1..x+1, the gradients of row yy, D of row yy + 1 at columns x-1..x+2.
+// S at the six columns of a row whose gradients are `g`: 0 outside the level
+// (`valid` says which columns are inside, and whether the row is).
+fn s6(g: G6, valid: Six) -> Six {
+    let xa = bitcast<vec4<i32>>(g.x.a);
+    let ya = bitcast<vec4<i32>>(g.y.a);
+    let xb = bitcast<vec2<i32>>(g.x.b);
+    let yb = bitcast<vec2<i32>>(g.y.b);
+    return Six(
+        select(vec4<u32>(0u), bitcast<vec4<u32>>(xa * xa + ya * ya), valid.a != vec4<u32>(0u)),
+        select(vec2<u32>(0u), bitcast<vec2<u32>>(xb * xb + yb * yb), valid.b != vec2<u32>(0u)),
+    );
+}
+
+// Column x0 + k's (gx2, gy2) (position k + 1 of the six; k constant at every call).
+fn g_at(g: G6, k: u32) -> vec2<i32> {
+    let x = bitcast<vec3<i32>>(tri(g.x, k));
+    let y = bitcast<vec3<i32>>(tri(g.y, k));
+    return vec2<i32>(x.y, y.y);
+}
+
+// The walk's window at row yy: S of rows yy - 1 (up) and yy (mid) and the
+// gradients of row yy at columns x0 - 1 .. x0 + 4, D of row yy + 1 at
+// columns x0 - 1 .. x0 + 5.
 struct Walk {
-    up: vec3<u32>,
-    mid: vec3<u32>,
-    g: array<vec2<i32>, 3>,
-    dnext: vec4<i32>,
+    up: Six,
+    mid: Six,
+    g: G6,
+    dnext: D7,
+}
+
+// Column x0 + k's M8 and NMS flag in row yy's place of their words (0 past
+// the walk's end), from the window and S of the row below.
+fn out_px(s: Walk, down: Six, k: u32, yy: u32, end: u32) -> vec2<u32> {
+    let v = tri(s.mid, k).y;
+    let g = g_at(s.g, k);
+    // v > first >= 0 keeps only S > 0 (SPEC 3 suppresses S = 0)
+    let ab = sector_pair(g.x, g.y, tri(s.up, k), tri(s.mid, k), tri(down, k));
+    let keep = select(0u, 1u, v > ab.x && v >= ab.y);
+    let m8 = min(magnitude(v), 255u);
+    return select(vec2<u32>(0u), vec2<u32>(pk_place(m8, yy), pk_place(keep, yy)), yy < end);
 }
 
 // Row yy of the group of rows y..y+3 (words `cur`, the next group's `nxt`):
-// its M8 and NMS flag in their places (0 past the walk's end), and the window
-// moved down a row. Called four times per group, rows written out: a loop
-// over the rows costs a SIMD software rasteriser its mask bookkeeping.
-fn row_step(s: ptr<function, Walk>, l: u32, y: u32, yy: u32, cur: vec4<u32>, nxt: vec4<u32>, h: u32, cols: vec3<bool>, end: u32) -> vec2<u32> {
+// the four columns' M8 (`m`) and NMS flags (`nms`) in their places, and the
+// window moved down a row. Called four times per group, rows written out: a
+// loop over the rows costs a SIMD software rasteriser its mask bookkeeping.
+struct Out4 {
+    m: vec4<u32>,
+    nms: vec4<u32>,
+}
+fn row_step(s: ptr<function, Walk>, l: u32, y: u32, yy: u32, cur: W7, nxt: W7, h: u32, cols: Six, end: u32) -> Out4 {
     // row yy + 1: its S (0 below the last row) and, next time, its gradients
     let y2 = min(yy + 2u, h - 1u);
-    let dnn = d4_at(l, select(nxt, cur, (y2 >> 2u) == (y >> 2u)), y2);
-    let gn = grad3((*s).dnext, dnn);
-    let down = s3(gn, select(vec3<bool>(false), cols, yy + 1u < h));
-    let v = (*s).mid.y;
-    // v > first >= 0 keeps only S > 0 (SPEC 3 suppresses S = 0)
-    let ab = sector_pair((*s).g[1].x, (*s).g[1].y, (*s).up, (*s).mid, down);
-    let keep = select(0u, 1u, v > ab.x && v >= ab.y);
-    let m8 = min(magnitude(v), 255u);
+    let dnn = d7_at(l, w7_select(nxt, cur, (y2 >> 2u) == (y >> 2u)), y2);
+    let gn = grad6((*s).dnext, dnn);
+    let below = select(0u, 1u, yy + 1u < h);
+    let down = s6(gn, Six(cols.a * below, cols.b * below));
+    let p0 = out_px(*s, down, 0u, yy, end);
+    let p1 = out_px(*s, down, 1u, yy, end);
+    let p2 = out_px(*s, down, 2u, yy, end);
+    let p3 = out_px(*s, down, 3u, yy, end);
     (*s).up = (*s).mid;
     (*s).mid = down;
     (*s).g = gn;
     (*s).dnext = dnn;
-    // rows past the walk's end stay 0 (rows past the level's last are 0)
-    return select(vec2<u32>(0u), vec2<u32>(pk_place(m8, yy), pk_place(keep, yy)), yy < end);
+    return Out4(vec4<u32>(p0.x, p1.x, p2.x, p3.x), vec4<u32>(p0.y, p1.y, p2.y, p3.y));
 }
 
-// A column pass (tile_column): the invocation of column x walks its rows with
-// D of columns x-1..x+2 and S of columns x-1..x+1 in registers (rows y-1, y,
-// y+1). `step` takes a word (four rows): it reads the next group's four words
-// of D and writes one word of `m` and of `nms`, all unconditionally, and
-// `row_step` takes its four rows. (Loads cached under `if` and
-// stores under `if`, the earlier form, ran every row on a SIMD software
-// rasteriser, which executes an if-body masked for every lane.)
+// A quad pass (common.wgsl quad_span): the invocation of columns x0 .. x0 + 3
+// walks their rows with D of columns x0 - 1 .. x0 + 5 and S of columns
+// x0 - 1 .. x0 + 4 in registers (rows y - 1, y, y + 1), so it reads seven
+// words of D per word of rows for four columns, where a column walk read four
+// for one (gradient_nms 3.4 -> 2.2 ms per KITTI frame on lavapipe). `step`
+// takes a word (four rows): it reads the next group's seven words of D and
+// writes four words of `m` and of `nms`, and `row_step` takes its four rows,
+// written out. Nothing is stored past the walk's end (a level's last, partial
+// tile) nor past the level's right edge.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let span = column_span(wg, li);
+    let span = quad_span(wg, li);
     if (span.y == span.z) { return; }
     let l = span.w;
-    let x = span.x;
+    let x0 = span.x;
     let h = lh(l);
-    let cols = vec3<bool>(x > 0u, true, x + 1u < lw(l));
+    let w = lw(l);
+    // which of columns x0 - 1 .. x0 + 4 lie in the level
+    let c = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
+    let cols = Six(
+        select(vec4<u32>(0u), vec4<u32>(1u), (c >= vec4<u32>(1u)) & (c <= vec4<u32>(w))),
+        select(vec2<u32>(0u), vec2<u32>(1u), vec2<u32>(x0 + 3u, x0 + 4u) < vec2<u32>(w)),
+    );
     // S of row y0 - 1 (none above row 0), gradients and S of row y0
-    var cur = d4_words(l, x, span.y);
+    var cur = d7_words(l, x0, span.y);
     var walk: Walk;
-    walk.up = vec3<u32>(0u);
+    walk.up = Six(vec4<u32>(0u), vec2<u32>(0u));
     if (span.y > 0u) {
         // row y0 - 1 is the last of the group before
-        walk.up = s3(grad3(d4_at(l, d4_words(l, x, span.y - 1u), span.y - 1u), d4_at(l, cur, span.y)), cols);
+        walk.up = s6(grad6(d7_at(l, d7_words(l, x0, span.y - 1u), span.y - 1u), d7_at(l, cur, span.y)), cols);
     }
-    walk.dnext = d4_at(l, cur, span.y + 1u);
-    walk.g = grad3(d4_at(l, cur, span.y), walk.dnext);
-    walk.mid = s3(walk.g, cols);
-    // the walk's four words (TILE rows), written out: a loop costs a SIMD
-    // software rasteriser its masks every iteration
-    var st = vec3<u32>(0u);
-    step(&walk, &cur, l, x, span.y, h, cols, span.z, &st);
-    step(&walk, &cur, l, x, span.y + 4u, h, cols, span.z, &st);
-    step(&walk, &cur, l, x, span.y + 8u, h, cols, span.z, &st);
-    step(&walk, &cur, l, x, span.y + 12u, h, cols, span.z, &st);
+    walk.dnext = d7_at(l, cur, span.y + 1u);
+    walk.g = grad6(d7_at(l, cur, span.y), walk.dnext);
+    walk.mid = s6(walk.g, cols);
+    step(&walk, &cur, l, x0, span.y, h, cols, span.z);
+    step(&walk, &cur, l, x0, span.y + 4u, h, cols, span.z);
+    step(&walk, &cur, l, x0, span.y + 8u, h, cols, span.z);
+    step(&walk, &cur, l, x0, span.y + 12u, h, cols, span.z);
 }
 
-// The words of `m` and `nms` of rows y .. y + 3 (`cur`: D's words of their
-// group); `st` is the last store (index, m word, nms word), stored again
-// when y is past the walk's end (a level's last, partial tile): no store
-// under `if`.
-fn step(
-    walk: ptr<function, Walk>,
-    cur: ptr<function, vec4<u32>>,
-    l: u32,
-    x: u32,
-    y: u32,
-    h: u32,
-    cols: vec3<bool>,
-    end: u32,
-    st: ptr<function, vec3<u32>>,
-) {
+// The words of `m` and `nms` of rows y .. y + 3 of the four columns (`cur`:
+// D's words of their group); nothing past the walk's end or the level's
+// right edge.
+fn step(walk: ptr<function, Walk>, cur: ptr<function, W7>, l: u32, x0: u32, y: u32, h: u32, cols: Six, end: u32) {
     // rows y + 4 .. y + 7 (clamped): rows y + 2 .. y + 5 feed this group
-    let nxt = d4_words(l, x, y + 4u);
-    var out = row_step(walk, l, y, y, *cur, nxt, h, cols, end);
-    out |= row_step(walk, l, y, y + 1u, *cur, nxt, h, cols, end);
-    out |= row_step(walk, l, y, y + 2u, *cur, nxt, h, cols, end);
-    out |= row_step(walk, l, y, y + 3u, *cur, nxt, h, cols, end);
+    let nxt = d7_words(l, x0, y + 4u);
+    let o0 = row_step(walk, l, y, y, *cur, nxt, h, cols, end);
+    let o1 = row_step(walk, l, y, y + 1u, *cur, nxt, h, cols, end);
+    let o2 = row_step(walk, l, y, y + 2u, *cur, nxt, h, cols, end);
+    let o3 = row_step(walk, l, y, y + 3u, *cur, nxt, h, cols, end);
     *cur = nxt;
-    // `m` and `nms` are column-packed: a word each per four rows
-    *st = select(*st, vec3<u32>(pk_word(l, x, y), out), y < end);
-    m[(*st).x] = (*st).y;
-    nms[(*st).x] = (*st).z;
+    let mw = o0.m | o1.m | o2.m | o3.m;
+    let nw = o0.nms | o1.nms | o2.nms | o3.nms;
+    // `m` and `nms` are column-packed: a word each per four rows and column
+    if (y < end) {
+        let i = pk_word(l, x0, y);
+        let w = lw(l);
+        m[i] = mw.x;
+        nms[i] = nw.x;
+        if (x0 + 1u < w) { m[i + 1u] = mw.y; nms[i + 1u] = nw.y; }
+        if (x0 + 2u < w) { m[i + 2u] = mw.z; nms[i + 2u] = nw.z; }
+        if (x0 + 3u < w) { m[i + 3u] = mw.w; nms[i + 3u] = nw.w; }
+    }
 }

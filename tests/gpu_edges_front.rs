@@ -272,7 +272,8 @@ fn gradient_nms_matches_cpu() {
         })
         .collect();
     let mut r = Rng::new(29);
-    for (w, h) in [(47u32, 33u32), (16, 2), (2, 19), (1, 1)] {
+    // every width mod 4 (a quad walk's last columns), quads narrower than seven columns
+    for (w, h) in [(47u32, 33u32), (16, 2), (2, 19), (1, 1), (3, 21), (6, 5), (71, 18)] {
         let d = Plane::from_vec(w, h, (0..w * h).map(|_| r.below_u64(4) as u8).collect()).unwrap();
         let g = cpu::gradient::gradient(&d);
         let nms = cpu::nms::nms(&g);

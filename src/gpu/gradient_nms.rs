@@ -20,5 +20,5 @@ simple_pass! {
         "m" = m,
         "nms" = nms,
     }
-    dispatch |b| Groups::Direct(b.layout.column_groups())
+    dispatch |b| Groups::Direct(b.layout.quad_groups())
 }
