@@ -3,8 +3,8 @@
 // pk_word) -> `ruled`, in which only NONE, WEAK and STRONG remain, as bits: one
 // word per column of every tile (common.wgsl tile_word), bit r = row 16 ty + r
 // is active (WEAK or STRONG), bit 16 + r is STRONG (gpu::layout::pack_ruled).
-// Hysteresis reads them so, a word per column walk. A column pass, all
-// levels in one dispatch (over the tile list). Both rules read the classes
+// Hysteresis reads them so, a word per column walk. A quad pass (four columns per invocation),
+// all levels in one dispatch (over the tile list). Both rules read the classes
 // of SPEC 6 only, so the result does not depend on the order of invocations.
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/rules.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
@@ -18,19 +18,22 @@ const WEAK: u32 = 2u;
 const WEAK_STRONG: u32 = 3u;
 const STRONG: u32 = 4u;
 
-// The packed words of columns (x-1, x, x+1) holding row y of level l (rows
-// y & ~3 .. + 4); 0, all NONE, outside the level (no replicate border here: a
-// missing neighbour matches no searched class, as rule_at only looks for
-// WEAK_STRONG and WEAK_WEAK; rows past the last of a word are NONE too).
-fn words3(l: u32, x: u32, y: i32) -> vec3<u32> {
-    // the three loads unconditional (clamped row and columns), then zeroed
+// The packed words of the six columns of a quad walk (`cols`, six_columns;
+// `inside`: all ones for the columns inside the level) holding row y of level
+// l (rows y & ~3 .. + 4); 0, all NONE, outside the level (no replicate border
+// here: a missing neighbour matches no searched class, as rule_at only looks
+// for WEAK_STRONG and WEAK_WEAK; rows past the last of a word are NONE too).
+fn six_words(l: u32, cols: Six, inside: Six, y: i32) -> Six {
+    // the six loads unconditional (clamped row and columns), then zeroed
     // outside the level
-    let inside = y >= 0 && y < i32(lh(l));
-    let i = pk_word(l, x, u32(clamp(y, 0, i32(lh(l)) - 1)));
-    let left = classes[i - select(0u, 1u, x > 0u)];
-    let right = classes[i + select(0u, 1u, x + 1u < lw(l))];
-    let r = vec3<u32>(select(0u, left, x > 0u), classes[i], select(0u, right, x + 1u < lw(l)));
-    return select(vec3<u32>(0u), r, inside);
+    let h = i32(lh(l));
+    let r = pk_word(l, 0u, u32(clamp(y, 0, h - 1)));
+    let row = select(0u, 0xffffffffu, y >= 0 && y < h);
+    return Six(
+        vec4<u32>(classes[r + cols.a.x], classes[r + cols.a.y], classes[r + cols.a.z], classes[r + cols.a.w])
+            & inside.a & vec4<u32>(row),
+        vec2<u32>(classes[r + cols.b.x], classes[r + cols.b.y]) & inside.b & vec2<u32>(row),
+    );
 }
 
 // True iff one of the 8 neighbours of the centre of the 3x3 window (a above,
@@ -57,40 +60,67 @@ fn ruled_bits(a: vec3<u32>, b: vec3<u32>, c: vec3<u32>, yy: i32, y0: i32, end: i
     return select(0u, v, yy < end);
 }
 
-// A column pass (tile_column): the 3x3 window walks down in registers. `step`
-// takes a word (four rows), reading the next group's three words
+// Column x0 + k's `ruled` bits of rows yy .. yy + 3 of the walk from rows a
+// (yy - 1), b (yy) and c0 .. c3 (yy + 1 .. yy + 4) of the six columns.
+fn quad_bits(a: Six, b: Six, c0: Six, c1: Six, c2: Six, c3: Six, k: u32, yy: i32, y0: i32, end: i32) -> u32 {
+    return ruled_bits(tri(a, k), tri(b, k), tri(c0, k), yy, y0, end)
+        | ruled_bits(tri(b, k), tri(c0, k), tri(c1, k), yy + 1, y0, end)
+        | ruled_bits(tri(c0, k), tri(c1, k), tri(c2, k), yy + 2, y0, end)
+        | ruled_bits(tri(c1, k), tri(c2, k), tri(c3, k), yy + 3, y0, end);
+}
+
+// A quad pass (common.wgsl quad_span): the 3x3 windows of four columns walk
+// down in registers, six columns' words per word of rows (a column walk read
+// three for one: rules 2.2 -> 1.3 ms per KITTI frame on lavapipe). `step`
+// takes a word (four rows), reading the next group's six words
 // unconditionally, with the four rows written out (`ruled_bits`); the walk's
 // four words are written out too, no loop (a SIMD software rasteriser pays a
 // loop's masks every iteration; steps past the walk's end add no bits). The
-// walk's word of `ruled` is written once at the end (see median.wgsl for why
-// not under `if`).
+// walk's four words of `ruled` are written once at the end, none past the
+// level's right edge.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let span = column_span(wg, li);
+    let span = quad_span(wg, li);
     if (span.y == span.z) { return; }
     let l = span.w;
-    let x = span.x;
+    let x0 = span.x;
+    let w = lw(l);
+    let cols = six_columns(x0, w);
+    // columns x0 - 1 .. x0 + 4 inside the level: all ones
+    let c = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
+    let inside = Six(
+        select(vec4<u32>(0u), vec4<u32>(0xffffffffu), (c >= vec4<u32>(1u)) & (c <= vec4<u32>(w))),
+        select(vec2<u32>(0u), vec2<u32>(0xffffffffu), vec2<u32>(x0 + 3u, x0 + 4u) < vec2<u32>(w)),
+    );
     let y0 = i32(span.y);  // a multiple of 4: the first row of its words
     let end = i32(span.z);
-    var a = pk_byte3(words3(l, x, y0 - 1), u32(y0 - 1));
-    var cur = words3(l, x, y0);
-    var b = pk_byte3(cur, u32(y0));
-    let bits = step(&a, &b, &cur, l, x, y0, y0, end) | step(&a, &b, &cur, l, x, y0 + 4, y0, end)
-        | step(&a, &b, &cur, l, x, y0 + 8, y0, end) | step(&a, &b, &cur, l, x, y0 + 12, y0, end);
-    ruled[tile_word(l, x, span.y / TILE)] = bits;
+    var a = six_bytes(six_words(l, cols, inside, y0 - 1), u32(y0 - 1));
+    var cur = six_words(l, cols, inside, y0);
+    var b = six_bytes(cur, u32(y0));
+    let bits = step(&a, &b, &cur, l, cols, inside, y0, y0, end) | step(&a, &b, &cur, l, cols, inside, y0 + 4, y0, end)
+        | step(&a, &b, &cur, l, cols, inside, y0 + 8, y0, end) | step(&a, &b, &cur, l, cols, inside, y0 + 12, y0, end);
+    let i = tile_word(l, x0, span.y / TILE);
+    ruled[i] = bits.x;
+    if (x0 + 1u < w) { ruled[i + 1u] = bits.y; }
+    if (x0 + 2u < w) { ruled[i + 2u] = bits.z; }
+    if (x0 + 3u < w) { ruled[i + 3u] = bits.w; }
 }
 
-// The `ruled` bits of rows y .. y + 3 (none past `end`); rows a (y - 1) and
-// b (y) and the words `cur` of y's group move down a group.
-fn step(a: ptr<function, vec3<u32>>, b: ptr<function, vec3<u32>>, cur: ptr<function, vec3<u32>>, l: u32, x: u32, y: i32, y0: i32, end: i32) -> u32 {
+// The four columns' `ruled` bits of rows y .. y + 3 (none past `end`); rows
+// a (y - 1) and b (y) and the words `cur` of y's group move down a group.
+fn step(a: ptr<function, Six>, b: ptr<function, Six>, cur: ptr<function, Six>, l: u32, cols: Six, inside: Six, y: i32, y0: i32, end: i32) -> vec4<u32> {
     // rows y + 4 .. y + 7: row y + 4 is the last group row's `c`
-    let nxt = words3(l, x, y + 4);
-    let c0 = pk_byte3(*cur, u32(y + 1));
-    let c1 = pk_byte3(*cur, u32(y + 2));
-    let c2 = pk_byte3(*cur, u32(y + 3));
-    let c3 = pk_byte3(nxt, u32(y + 4));
-    let bits = ruled_bits(*a, *b, c0, y, y0, end) | ruled_bits(*b, c0, c1, y + 1, y0, end)
-        | ruled_bits(c0, c1, c2, y + 2, y0, end) | ruled_bits(c1, c2, c3, y + 3, y0, end);
+    let nxt = six_words(l, cols, inside, y + 4);
+    let c0 = six_bytes(*cur, u32(y + 1));
+    let c1 = six_bytes(*cur, u32(y + 2));
+    let c2 = six_bytes(*cur, u32(y + 3));
+    let c3 = six_bytes(nxt, u32(y + 4));
+    let bits = vec4<u32>(
+        quad_bits(*a, *b, c0, c1, c2, c3, 0u, y, y0, end),
+        quad_bits(*a, *b, c0, c1, c2, c3, 1u, y, y0, end),
+        quad_bits(*a, *b, c0, c1, c2, c3, 2u, y, y0, end),
+        quad_bits(*a, *b, c0, c1, c2, c3, 3u, y, y0, end),
+    );
     *a = c2;
     *b = c3;
     *cur = nxt;

@@ -306,7 +306,21 @@ fn rules_match_cpu_on_random_classes() {
     let Some(ctx) = t::context() else { return };
     let pass = RulesPass::new(&ctx.device);
     let mut rng = XorRng::new(7);
-    for (w, h, levels) in [(37, 29, 3), (130, 75, 4), (17, 1, 1), (1, 1, 1), (1, 19, 2), (16, 16, 2), (64, 33, 5)] {
+    // every width mod 4 (a quad walk's last columns), quads narrower than six columns
+    let sizes = [
+        (37, 29, 3),
+        (130, 75, 4),
+        (17, 1, 1),
+        (1, 1, 1),
+        (1, 19, 2),
+        (16, 16, 2),
+        (64, 33, 5),
+        (2, 7, 1),
+        (3, 40, 1),
+        (6, 18, 2),
+        (71, 9, 1),
+    ];
+    for (w, h, levels) in sizes {
         let cfg = Config { n_levels: levels, ..Config::default() };
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         poison(&ctx, &b.ruled, 9);

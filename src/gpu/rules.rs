@@ -17,5 +17,5 @@ simple_pass! {
         "classes" = classes,
         "ruled" = ruled,
     }
-    dispatch |b| Groups::Direct(b.layout.column_groups())
+    dispatch |b| Groups::Direct(b.layout.quad_groups())
 }
