@@ -148,10 +148,13 @@ fn cells(
     let r = win;
     // bins li, li + 8, ...: the non-empty ones as bits, added in a `while`
     // loop (most of a small or flat cell's bins are empty)
-    // (256 / CELL_INVOCATIONS = 32 bits)
+    // (256 / CELL_INVOCATIONS = 32 bits). Loops bounded by `li` here and in
+    // `stats`: lavapipe's compiler unrolls a loop of constant trip count,
+    // and the pass's 32 + 32 unrolled atomics took its compile from 9 to
+    // 52 ms (and ran 5% slower).
     var full = 0u;
-    for (var q = 0u; q < 256u / CELL_INVOCATIONS; q++) {
-        full |= select(0u, 1u << q, atomicLoad(&bins[li + CELL_INVOCATIONS * q]) != 0u);
+    for (var k = li; k < 256u; k += CELL_INVOCATIONS) {
+        full |= select(0u, 1u << ((k - li) / CELL_INVOCATIONS), atomicLoad(&bins[k]) != 0u);
     }
     while (full != 0u) {
         let k = li + CELL_INVOCATIONS * firstTrailingBit(full);
@@ -185,14 +188,14 @@ fn stats(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: ve
     // Workgroup-uniform: the barriers below are reached by all or none.
     if (l >= P.n_levels || i >= nx || j >= ny) { return; }
     let base = (P.levels[l].w + j * nx + i) * 256u;
-    // runs 2 li and 2 li + 1 of 16 bins into workgroup
-    // memory; this invocation's lowest non-empty bin and 1 + its highest (0: none)
+    // runs 2 li and 2 li + 1 of 16 bins into workgroup memory (loops bounded
+    // by li: see cells); this invocation's lowest non-empty bin and 1 + its
+    // highest (0: none)
     var lo = 256u;
     var hi = 0u;
     for (var r = 2u * li; r < 2u * li + 2u; r++) {
         var sum = 0u;
-        for (var q = 0u; q < 16u; q++) {
-            let k = r * 16u + q;
+        for (var k = r * 16u; k < r * 16u + 16u; k++) {
             let c = atomicLoad(&window_hist[base + k]);
             atomicStore(&bins[k], c);
             sum += c;
