@@ -210,9 +210,24 @@ fn pyramid_with_other_scale_factors() {
 fn blur_matches_cpu_on_every_level() {
     let Some(ctx) = t::context() else { return };
     let pass = BlurPass::new(&ctx.device);
-    for (w, h, levels, seed) in
-        [(37, 29, 3, 1), (130, 75, 5, 2), (17, 1, 2, 3), (1, 1, 1, 4), (2, 5, 3, 5), (7, 4, 8, 6)]
-    {
+    // heights 1..3 and 16k + 1..3 (a last tile of 1-3 rows, whose reflected
+    // rows come from the tile above), widths of every remainder mod 4
+    let sizes = [
+        (37, 29, 3, 1),
+        (130, 75, 5, 2),
+        (17, 1, 2, 3),
+        (1, 1, 1, 4),
+        (2, 5, 3, 5),
+        (7, 4, 8, 6),
+        (3, 17, 1, 7),
+        (6, 18, 1, 8),
+        (71, 19, 2, 9),
+        (5, 2, 1, 10),
+        (4, 3, 1, 11),
+        (33, 33, 1, 12),
+        (20, 35, 1, 13),
+    ];
+    for (w, h, levels, seed) in sizes {
         let cfg = Config { n_levels: levels, ..Config::default() };
         let img = t::test_image(w, h, seed);
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();

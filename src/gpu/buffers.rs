@@ -239,9 +239,6 @@ pub struct Buffers {
     pub indirect: wgpu::Buffer,
     /// 7x7-blurred levels (SPEC 11), column-packed as `classes`.
     pub smooth: wgpu::Buffer,
-    /// Horizontal blur pass output: Q8 sums, two rows of a column per word
-    /// (shaders/blur.wgsl), in the first half of each level's atlas range.
-    pub blur_tmp: wgpu::Buffer,
     /// Rotated patterns: per bin 256 pairs, each one word of four i8 (x1, y1,
     /// x2, y2, lowest byte first).
     pub patterns: wgpu::Buffer,
@@ -388,7 +385,6 @@ impl Buffers {
             counters: buf("counters", counter::LEN as u64 * 4),
             indirect: init("indirect", bytemuck::cast_slice(&indirect_init), storage | wgpu::BufferUsages::INDIRECT),
             smooth: buf("smooth", allocated.packed * 4),
-            blur_tmp: px("blur_tmp"),
             patterns: init("patterns", bytemuck::cast_slice(&patterns), storage),
             angle_bounds: init("angle_bounds", bytemuck::cast_slice(&angle_bounds), storage),
             allocated,
