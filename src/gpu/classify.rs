@@ -27,5 +27,5 @@ simple_pass! {
         "grid" = grid,
         "classes" = classes,
     }
-    dispatch |b| Groups::Direct(b.layout.column_groups())
+    dispatch |b| Groups::Direct(b.layout.quad_groups())
 }
