@@ -32,6 +32,9 @@ const CASES: &[(u32, u32, u32, u32, u32)] = &[
     (64, 48, 2, 2, 0),
     (33, 17, 3, 7, 99),
     (16, 16, 1, 6, 50),
+    // widths 3 and 71 (quad passes: every remainder mod 4, quads past the edge)
+    (3, 21, 2, 9, 35),
+    (71, 19, 2, 10, 35),
 ];
 
 /// One case: its config, buffers and the CPU edge map of every pyramid level.
