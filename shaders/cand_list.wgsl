@@ -1,9 +1,11 @@
-// The candidate list (between SPEC 8 and SPEC 9): the atlas index of every
-// L-FAST candidate, appended to `cand_list` in no particular order, counted
-// in counters[CANDS], and the indirect dispatch args over it (64 candidates
-// per workgroup). response.wgsl and corner_nms.wgsl run over the list by
-// indirect dispatch, so neither scans the levels' pixels: one dense scan for
-// both, here.
+// The candidate list (between SPEC 8 and SPEC 9) from a `cand` plane: the
+// atlas index of every L-FAST candidate, appended to `cand_list` in no
+// particular order, counted in counters[CANDS], and the indirect dispatch
+// args over it (64 candidates per workgroup). response.wgsl and
+// corner_nms.wgsl run over the list by indirect dispatch. A standalone
+// shader: the pipeline's lfast.wgsl appends the list as it finds the
+// candidates; this dense scan lets the tests run those passes on a given
+// plane.
 // Entries: `main`, a column pass (tile_column) over the tile list, all levels
 // in one dispatch; then `args`, one invocation.
 // Tests: tests/gpu_keypoints.rs (response and corner NMS alone run after it);

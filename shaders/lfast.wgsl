@@ -1,7 +1,11 @@
 // SPEC 8: the L-FAST corner test on the edge map (paper 3.2, Steps 1-5).
 // Mirrors src/cpu/lfast.rs. `edges` (+ `mask` when P.use_mask == 1) ->
 // `cand` (1 = candidate, 0 otherwise; column-packed, common.wgsl pk_word;
-// every word of every level is written).
+// cleared by the pass's prepare), and the candidate list: every candidate's
+// atlas index appended to `cand_list` in no particular order, counted in
+// counters[CANDS], and the indirect args over it (entry `cand_args`), which
+// response.wgsl and corner_nms.wgsl dispatch over. (cand_list.wgsl builds the
+// same list from a `cand` plane: the tests' staged reference.)
 // A column pass, all levels in one dispatch (over the tile list); the test
 // itself runs on the workgroup's compacted edge pixels (see main).
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/lfast.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -12,11 +16,15 @@
 @group(0) @binding(4) var<storage, read_write> edge_bits: array<u32>;
 @group(0) @binding(5) var<storage, read_write> edge_list: array<u32>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
-@group(0) @binding(7) var<storage, read_write> indirect: array<u32>;
+@group(0) @binding(7) var<storage, read_write> cand_list: array<u32>;
+@group(0) @binding(8) var<storage, read_write> indirect: array<u32>;
 
-// counter::EDGES and indirect::EDGES / 4 in src/gpu/buffers.rs.
+// counter::EDGES, counter::CANDS, indirect::EDGES / 4 and indirect::CANDS / 4
+// in src/gpu/buffers.rs.
 const C_EDGES: u32 = 4u;
+const C_CANDS: u32 = 3u;
 const I_EDGES: u32 = 20u;
+const I_CANDS: u32 = 16u;
 
 const EDGE: u32 = 255u;
 
@@ -205,7 +213,10 @@ fn args() {
 // indirect dispatch over the edge list, so the test runs in as few SIMD lanes
 // / warps as there are edge pixels and nothing scans the levels' pixels. A
 // corner sets its byte of `cand` (column-packed, cleared by the pass's
-// prepare) with an atomic OR: other pixels of its word may be corners too.
+// prepare) with an atomic OR (other pixels of its word may be corners too)
+// and appends its index to `cand_list`: the candidates are few (a few
+// thousand per KITTI frame), and a dense scan of `cand` to list them cost
+// lavapipe ~0.8 ms per KITTI frame.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let k = list_index(wg, li);
@@ -214,5 +225,16 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let p = atlas_pixel(i);
     if ((P.use_mask == 0u || mask[i] != 0u) && is_corner(p.z, i32(p.x), i32(p.y))) {
         atomicOr(&cand[pk_word(p.z, p.x, p.y)], pk_place(1u, p.y));
+        cand_list[atomicAdd(&counters[C_CANDS], 1u)] = i;
     }
+}
+
+// Entry `cand_args`, one invocation after `main`: the indirect args over the
+// candidate list, ceil(n / 64) workgroups as (x, y, 1), x <= 65535.
+@compute @workgroup_size(1, 1, 1)
+fn cand_args() {
+    let g = list_args(atomicLoad(&counters[C_CANDS]));
+    indirect[I_CANDS] = g.x;
+    indirect[I_CANDS + 1u] = g.y;
+    indirect[I_CANDS + 2u] = g.z;
 }

@@ -8,6 +8,7 @@ use common::crop;
 use lfast::cpu::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use lfast::cpu::lfast::{LfastParams, lfast as cpu_lfast};
 use lfast::cpu::{edge_map, hysteresis::hysteresis, rules::rules};
+use lfast::gpu::buffers::{counter, indirect};
 use lfast::gpu::hysteresis::HysteresisPass;
 use lfast::gpu::lfast::LfastPass;
 use lfast::gpu::rules::RulesPass;
@@ -181,15 +182,32 @@ fn check_lfast(
             t::upload_plane(ctx, b, &b.mask, l, &m[l]);
         }
     }
+    // stale cursors must not matter: the pass's prepare clears them
+    t::upload(ctx, &b.counters, &[9; counter::LEN]);
     t::run(ctx, pass, b).unwrap();
     let lp = LfastParams::from_config(cfg);
     let mut total = 0;
+    let mut all = Vec::new();
     for (l, e) in edges.iter().enumerate() {
         let want = cpu_lfast(e, masks.map(|m| &m[l]), &lp);
         let got = gpu_candidates(ctx, b, l);
         assert_eq!(got, want, "{what} level {l} ({}x{}) {lp:?} mask {}", e.width, e.height, masks.is_some());
+        let o = b.layout.level_range(l).start as u32;
+        all.extend(want.iter().map(|&[x, y]| o + y * e.width + x));
         total += want.len();
     }
+    // the candidate list the pass appends (any order): every candidate once,
+    // and the indirect args over it
+    let counters = t::download(ctx, &b.counters).unwrap();
+    let n = counters[counter::CANDS] as usize;
+    let mut list = t::download(ctx, &b.cand_list).unwrap()[..n].to_vec();
+    list.sort_unstable();
+    all.sort_unstable();
+    assert_eq!(list, all, "{what}: the candidate list");
+    let args = t::download(ctx, &b.indirect).unwrap();
+    let at = (indirect::CANDS / 4) as usize;
+    let groups = n.div_ceil(64) as u32;
+    assert_eq!(args[at..at + 3], [groups.min(65535), groups.div_ceil(65535), 1], "{what}: the list's dispatch args");
     total
 }
 

@@ -2,9 +2,11 @@
 //! index of every candidate in `cand_list` (unordered), its count in
 //! `counters[counter::CANDS]` and the indirect args `indirect::CANDS` that
 //! [`ResponsePass`](super::response::ResponsePass) and
-//! [`CornerNmsPass`](super::corner_nms::CornerNmsPass) dispatch over. The CPU
-//! lists its candidates as it finds them (`cpu::lfast`), so this stage has no
-//! CPU mirror of its own.
+//! [`CornerNmsPass`](super::corner_nms::CornerNmsPass) dispatch over. Not a
+//! pipeline stage: the pipeline's [`LfastPass`](super::lfast::LfastPass)
+//! appends each candidate as it finds it (as the CPU's `cpu::lfast` does), and
+//! this standalone pass builds the same list from a `cand` plane, for running
+//! response and corner NMS alone on given candidates (tests/gpu_keypoints.rs).
 
 use super::buffers::{Buffers, counter};
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b};

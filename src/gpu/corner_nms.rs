@@ -3,7 +3,9 @@
 //! appended to `corners` as [`GpuKeypoint`](super::GpuKeypoint)s, counted in
 //! `counters[counter::CORNERS]`, in no particular order
 //! ([`SelectPass`](super::select::SelectPass) orders them); one indirect
-//! dispatch over the list ([`CandListPass`](super::cand_list::CandListPass)).
+//! dispatch over the list ([`LfastPass`](super::lfast::LfastPass) appends it;
+//! [`CandListPass`](super::cand_list::CandListPass) builds it from a `cand`
+//! plane).
 
 use super::buffers::indirect;
 use super::kernel::{Binding, PARAMS, Slot, b};
@@ -21,7 +23,8 @@ pub const BINDINGS: &[Binding] = &[
     b(5, "counters", Slot::ReadWrite),
 ];
 
-// The append cursor starts at 0: the candidate-list pass clears the counters.
+// The append cursor starts at 0: the lfast pass (or the candidate-list pass,
+// run alone) clears the counters.
 simple_pass! {
     /// The corner NMS pass.
     CornerNmsPass = "corner_nms" {

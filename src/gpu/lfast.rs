@@ -1,10 +1,15 @@
 //! SPEC 8 (the L-FAST corner test) on the GPU: shaders/lfast.wgsl, mirroring
 //! src/cpu/lfast.rs. `edges` (+ `mask` when `Params::use_mask` is 1) ->
-//! `cand` (1 = candidate), all levels at once, in three dispatches: `windows`
-//! (each tile column's edges and 8 rows either side as the bits of a word,
-//! `edge_bits`, and the tested edge pixels appended to `edge_list`), `args`
-//! (the indirect args over the list), then `main` (the test, one invocation
-//! per listed pixel, a load per column of its stencil).
+//! `cand` (1 = candidate) and the candidate list (`cand_list`, its count
+//! `counters[counter::CANDS]` and the args `indirect::CANDS` that
+//! [`ResponsePass`](super::response::ResponsePass) and
+//! [`CornerNmsPass`](super::corner_nms::CornerNmsPass) dispatch over), all
+//! levels at once, in four dispatches: `windows` (each tile column's edges and
+//! 8 rows either side as the bits of a word, `edge_bits`, and the tested edge
+//! pixels appended to `edge_list`), `args` (the indirect args over that list),
+//! `main` (the test, one invocation per listed pixel, a load per column of its
+//! stencil; a corner sets its `cand` byte and appends itself to `cand_list`),
+//! then `cand_args`.
 
 use super::buffers::{Buffers, counter, indirect};
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
@@ -22,27 +27,30 @@ pub const BINDINGS: &[Binding] = &[
     b(4, "edge_bits", Slot::ReadWrite),
     b(5, "edge_list", Slot::ReadWrite),
     b(6, "counters", Slot::ReadWrite),
-    b(7, "indirect", Slot::ReadWrite),
+    b(7, "cand_list", Slot::ReadWrite),
+    b(8, "indirect", Slot::ReadWrite),
 ];
 
 /// The bindings of `main`, which is dispatched indirectly: all but
 /// `indirect`, which that dispatch reads its size from (a buffer may not be
 /// bound as storage while it is the dispatch's indirect buffer).
-const TEST_BINDINGS: &[Binding] = BINDINGS.split_at(7).0;
+const TEST_BINDINGS: &[Binding] = BINDINGS.split_at(8).0;
 
-/// [`LfastPass`]'s bind groups: `windows` and `args` (with `indirect`), `main`.
+/// [`LfastPass`]'s bind groups: `windows`, `args` and `cand_args` (with
+/// `indirect`), `main`.
 #[derive(Debug)]
 pub struct LfastBound {
     lists: wgpu::BindGroup,
     test: wgpu::BindGroup,
 }
 
-/// The L-FAST candidate pass: `windows`, `args`, then `main`.
+/// The L-FAST candidate pass: `windows`, `args`, `main`, then `cand_args`.
 #[derive(Debug)]
 pub struct LfastPass {
     windows: Kernel,
     args: Kernel,
     test: Kernel,
+    cand_args: Kernel,
 }
 
 impl Pass for LfastPass {
@@ -55,6 +63,7 @@ impl Pass for LfastPass {
             windows: Kernel::from_module(device, "lfast windows", &module, "windows", BINDINGS),
             args: Kernel::from_module(device, "lfast args", &module, "args", BINDINGS),
             test: Kernel::from_module(device, "lfast main", &module, "main", TEST_BINDINGS),
+            cand_args: Kernel::from_module(device, "lfast cand_args", &module, "cand_args", BINDINGS),
         }
     }
 
@@ -67,10 +76,11 @@ impl Pass for LfastPass {
             ("edge_bits", &b.edge_bits),
             ("edge_list", &b.edge_list),
             ("counters", &b.counters),
+            ("cand_list", &b.cand_list),
             ("indirect", &b.indirect),
         ];
-        // `windows` and `args` have the same layout entries: one group serves both.
-        Ok(LfastBound { lists: self.windows.bind(device, &buffers)?, test: self.test.bind(device, &buffers[..7])? })
+        // `windows`, `args` and `cand_args` have the same layout entries: one group serves all three.
+        Ok(LfastBound { lists: self.windows.bind(device, &buffers)?, test: self.test.bind(device, &buffers[..8])? })
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &LfastBound, b: &Buffers) {
@@ -78,12 +88,15 @@ impl Pass for LfastPass {
         self.windows.dispatch(pass, &bound.lists, b.layout.column_groups());
         self.args.dispatch(pass, &bound.lists, [1, 1, 1]);
         self.test.dispatch_indirect(pass, &bound.test, &b.indirect, indirect::EDGES);
+        self.cand_args.dispatch(pass, &bound.lists, [1, 1, 1]);
     }
 
     fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
-        // `main` sets the corners' bytes of `cand` only, and the edge list's
-        // cursor starts at 0 (its own counter: the others belong to later stages).
+        // `main` sets the corners' bytes of `cand` only; the cursors of its
+        // two lists (counters EDGES and CANDS) and of the stages after it
+        // (corner NMS's CORNERS, select's KEYPOINTS and TAKEN) start at 0.
+        const { assert!(counter::EDGES == 4 && counter::CANDS < 4 && counter::TAKEN < 4) };
         encoder.clear_buffer(&b.cand, 0, None);
-        encoder.clear_buffer(&b.counters, 4 * counter::EDGES as u64, Some(4));
+        encoder.clear_buffer(&b.counters, 0, Some(4 * (counter::EDGES as u64 + 1)));
     }
 }

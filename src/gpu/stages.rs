@@ -111,14 +111,13 @@ stages! {
     rules: RulesPass,
     hysteresis: HysteresisPass,
     lfast: LfastPass,
-    cand_list: CandListPass,
     response: ResponsePass,
     corner_nms: CornerNmsPass,
     select: SelectPass,
     blur: BlurPass,
     orientation: OrientationPass,
     orb: OrbPass;
-    standalone: matcher, gradient, nms, histogram,
+    standalone: matcher, gradient, nms, histogram, cand_list,
 }
 
 /// Per-stage GPU timestamps (when the adapter has `TIMESTAMP_QUERY`): a
