@@ -160,19 +160,56 @@ fn window_nibble(top: u32, last: u32, l: u32, g: i32, k: i32, h: u32) -> u32 {
 // every side) to `edge_list`: their rows as bits, then a `while` loop over
 // those only (an if-body in the walk would run every row, masked, on a SIMD
 // software rasteriser).
+//
+// A quad pass (common.wgsl quad_span): four columns per invocation, their
+// tested rows in two loops of two columns (bit 16 k + r: row r of column
+// x0 + k, resp. x0 + 2 + k); one column per invocation, the invocations' own
+// work was a good part of the pass on lavapipe.
 @compute @workgroup_size(64, 1, 1)
 fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let span = column_span(wg, li);
+    let span = quad_span(wg, li);
     if (span.y >= span.z) { return; }
     let l = span.w;
     let w = lw(l);
     let h = lh(l);
+    let x0 = span.x;
+    // The tested rows: b .. h - b - 1 of columns b .. w - b - 1 (a level
+    // with w or h <= 2 * border has none; written so nothing underflows),
+    // here rows y0 + r with r in [lo, hi).
+    let b = max(P.border, 7u);
+    let lo = u32(clamp(i32(b) - i32(span.y), 0, 16));
+    let hi = u32(clamp(i32(h) - i32(b) - i32(span.y), 0, 16));
+    let tested = select(0u, ((1u << hi) - 1u) & ~((1u << lo) - 1u), hi > lo);
+    let r0 = column_window(l, x0, span.y, w, h, b, tested);
+    let r1 = column_window(l, x0 + 1u, span.y, w, h, b, tested);
+    let r2 = column_window(l, x0 + 2u, span.y, w, h, b, tested);
+    let r3 = column_window(l, x0 + 3u, span.y, w, h, b, tested);
+    let base = loff(l) + span.y * w + x0;
+    var rows = r0 | (r1 << 16u);
+    while (rows != 0u) {
+        let k = countTrailingZeros(rows);
+        rows &= rows - 1u;
+        edge_list[atomicAdd(&counters[C_EDGES], 1u)] = base + (k & 15u) * w + (k >> 4u);
+    }
+    rows = r2 | (r3 << 16u);
+    while (rows != 0u) {
+        let k = countTrailingZeros(rows);
+        rows &= rows - 1u;
+        edge_list[atomicAdd(&counters[C_EDGES], 1u)] = base + (k & 15u) * w + 2u + (k >> 4u);
+    }
+}
+
+// Column x's edge window of the tile row of y0 (stored to `edge_bits` when x
+// is inside the level) and its tested edge rows (bit r: row y0 + r; `tested`
+// the rows the level's border leaves, b the border).
+fn column_window(l: u32, x: u32, y0: u32, w: u32, h: u32, b: u32, tested: u32) -> u32 {
     // rows r - 8 .. r - 5, r = y0 + 4k: a whole packed word, or none of the
     // level; the eight loads unconditional (clamped into the level), the
     // words outside it dropped
-    let top = pk_word(l, span.x, 0u);
-    let last = pk_word(l, span.x, h - 1u);
-    let g = i32(span.y >> 2u) - 2;
+    let xc = min(x, w - 1u);
+    let top = pk_word(l, xc, 0u);
+    let last = pk_word(l, xc, h - 1u);
+    let g = i32(y0 >> 2u) - 2;
     var bits = 0u;
     bits |= window_nibble(top, last, l, g, 0, h);
     bits |= window_nibble(top, last, l, g, 1, h);
@@ -182,21 +219,8 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
     bits |= window_nibble(top, last, l, g, 5, h);
     bits |= window_nibble(top, last, l, g, 6, h);
     bits |= window_nibble(top, last, l, g, 7, h);
-    edge_bits[tile_word(l, span.x, span.y / TILE)] = bits;
-    // The tested rows: b .. h - b - 1 of columns b .. w - b - 1 (a level
-    // with w or h <= 2 * border has none; written so nothing underflows),
-    // here rows y0 + r with r in [lo, hi).
-    let b = max(P.border, 7u);
-    let lo = u32(clamp(i32(b) - i32(span.y), 0, 16));
-    let hi = u32(clamp(i32(h) - i32(b) - i32(span.y), 0, 16));
-    let col = span.x >= b && span.x + b < w;
-    var rows = select(0u, (bits >> 8u) & ((1u << hi) - 1u) & ~((1u << lo) - 1u), col && hi > lo);
-    let base = loff(l) + span.y * w + span.x;
-    while (rows != 0u) {
-        let r = countTrailingZeros(rows);
-        rows &= rows - 1u;
-        edge_list[atomicAdd(&counters[C_EDGES], 1u)] = base + r * w;
-    }
+    if (x < w) { edge_bits[tile_word(l, x, y0 / TILE)] = bits; }
+    return select(0u, (bits >> 8u) & tested, x >= b && x + b < w);
 }
 
 // Entry `args`, one invocation: the indirect args of `main` over the edge

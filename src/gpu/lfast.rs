@@ -85,7 +85,7 @@ impl Pass for LfastPass {
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &LfastBound, b: &Buffers) {
         // wgpu orders the dispatches of one compute pass (each sees the one before).
-        self.windows.dispatch(pass, &bound.lists, b.layout.column_groups());
+        self.windows.dispatch(pass, &bound.lists, b.layout.quad_groups());
         self.args.dispatch(pass, &bound.lists, [1, 1, 1]);
         self.test.dispatch_indirect(pass, &bound.test, &b.indirect, indirect::EDGES);
         self.cand_args.dispatch(pass, &bound.lists, [1, 1, 1]);
