@@ -14,12 +14,11 @@
 // `labels` holds each pixel's parent p as its complement ~p, so the buffer as
 // cleared by the pass's prepare (all 0) says "no parent": every pixel starts
 // as a root, without an init dispatch. Below, "labels[i]" means the parent
-// ~labels[i], with NONE (= ~0) ordered above every index. Three dispatches
-// over every level, merge a column pass (one invocation per column of a tile,
-// see tile_column), compress and final_edges quad passes (four columns per
-// invocation, see quad_span: with a few run tops per column, the
-// invocations' own work was most of their cost on lavapipe: compress 2.3 ->
-// 2.05, final_edges 2.2 -> 1.8 ms per KITTI frame), in this order:
+// ~labels[i], with NONE (= ~0) ordered above every index. Three dispatches,
+// each a quad pass over every level (four columns of a tile per invocation,
+// see quad_span: with a few run tops per column, the invocations' own work
+// was a good part of their cost on lavapipe; hysteresis 6.8 -> 5.8 ms per
+// KITTI frame with all three), in this order:
 //   merge        union of each active pixel with its active left, up-left,
 //                up and up-right neighbours (the other four see it as theirs),
 //                as few of them as keep the components, made between the
@@ -112,14 +111,19 @@ fn link(i: u32, t: u32) {
     if (old != NONE && old != t) { unite(old, t); }
 }
 
-// The `ruled` words of columns x-1, x, x+1 of tile row ty of level l (the
-// column's own in .y); a column outside the level reads as 0 (never active).
-// Three unconditional loads (columns clamped), then zeroed outside.
-fn words3(l: u32, x: u32, ty: u32) -> vec3<u32> {
-    let left = ruled[tile_word(l, x - select(0u, 1u, x > 0u), ty)];
-    let right = ruled[tile_word(l, min(x + 1u, lw(l) - 1u), ty)];
-    return vec3<u32>(select(0u, left, x > 0u), ruled[tile_word(l, x, ty)], select(0u, right, x + 1u < lw(l)));
+// The active rows (`ruled` bits 0..15) of the six columns of a quad walk
+// (`cols`, six_columns; `inside`: all ones for the columns inside the level)
+// in tile row ty of level l; a column outside the level reads as 0 (never
+// active). Six unconditional loads (columns clamped), then zeroed outside.
+fn six_active(l: u32, cols: Six, inside: Six, ty: u32) -> Six {
+    let t = (P.tiles[l].x + ty * P.tiles[l].y) * TILE;
+    let a = vec4<u32>(ruled[t + tile_col(cols.a.x)], ruled[t + tile_col(cols.a.y)], ruled[t + tile_col(cols.a.z)], ruled[t + tile_col(cols.a.w)]);
+    let b = vec2<u32>(ruled[t + tile_col(cols.b.x)], ruled[t + tile_col(cols.b.y)]);
+    return Six(a & inside.a & vec4<u32>(0xffffu), b & inside.b & vec2<u32>(0xffffu));
 }
+
+// Column x's offset in its tile row of a tile-column plane (tile_word).
+fn tile_col(x: u32) -> u32 { return (x / TILE) * TILE + x % TILE; }
 
 // merge: active pixel i at (x, y) is united with its active neighbours of
 // the row above (UL, U, UR) and the left (L), the only neighbours that come
@@ -142,24 +146,44 @@ fn words3(l: u32, x: u32, ty: u32) -> vec3<u32> {
 // union with U is the run itself. compress and final_edges read the tops'
 // labels only, so no other pixel's label is ever written or read. The tops
 // of the neighbours' runs come from the `ruled` bit words of columns x-1, x,
-// x+1 of the walk's tile and the tile above (six loads, unconditional); every
-// row's decision is taken at once in bit operations, and the unions are made
-// in a loop over the rows that have any. A SIMD software rasteriser runs a
+// x+1 of the walk's tile and the tile above (for a quad walk's four columns,
+// twelve loads of six columns, unconditional); every row's decision is taken
+// at once in bit operations, and each column's unions are made in a loop
+// over the rows that have any (merge_column). A SIMD software rasteriser runs a
 // branch's body for every lane of the group (masked), so the unions in the
 // walk cost 16 times per column; compacted, they cost as many times as the
 // busiest lane of the group has tops to join.
 @compute @workgroup_size(64, 1, 1)
 fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let c = column_span(wg, li);
+    let c = quad_span(wg, li);
     if (c.y == c.z) { return; }
     let l = c.w;
     let w = lw(l);
+    let x0 = c.x;
     let ty = c.y / TILE;
-    // the walk's active rows of columns x-1, x, x+1 (bit r = row c.y + r;
+    // the walk's active rows of columns x0 - 1 .. x0 + 4 (bit r = row c.y + r;
     // rows past the level's last are clear), and those of the walk above
     // (none above row 0)
-    let cols = words3(l, c.x, ty) & vec3<u32>(0xffffu);
-    let prev = select(vec3<u32>(0u), words3(l, c.x, max(ty, 1u) - 1u) & vec3<u32>(0xffffu), ty > 0u);
+    let cols = six_columns(x0, w);
+    let cx = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
+    let inside = Six(
+        select(vec4<u32>(0u), vec4<u32>(0xffffffffu), (cx >= vec4<u32>(1u)) & (cx <= vec4<u32>(w))),
+        select(vec2<u32>(0u), vec2<u32>(0xffffffffu), vec2<u32>(x0 + 3u, x0 + 4u) < vec2<u32>(w)),
+    );
+    let cur = six_active(l, cols, inside, ty);
+    let above = six_active(l, cols, Six(inside.a * u32(ty > 0u), inside.b * u32(ty > 0u)), max(ty, 1u) - 1u);
+    // atlas index of row 0 of this walk at column x0 - 1
+    let row0 = loff(l) + c.y * w + x0 - 1u;
+    merge_column(tri(cur, 0u), tri(above, 0u), row0, w);
+    merge_column(tri(cur, 1u), tri(above, 1u), row0 + 1u, w);
+    merge_column(tri(cur, 2u), tri(above, 2u), row0 + 2u, w);
+    merge_column(tri(cur, 3u), tri(above, 3u), row0 + 3u, w);
+}
+
+// The unions of one column x of a quad walk: `cols` the active rows of
+// columns x-1, x, x+1 in this walk, `prev` in the walk above, `row0` the
+// atlas index of row 0 of column x - 1.
+fn merge_column(cols: vec3<u32>, prev: vec3<u32>, row0: u32, w: u32) {
     let above = prev >> vec3<u32>(15u);
     // every row's neighbours at once, as bits: up-left, up, up-right
     let ups = ((cols << vec3<u32>(1u)) | above) & vec3<u32>(0xffffu);
@@ -175,8 +199,6 @@ fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     // the first rows of the vertical runs of this walk and the one above
     let tops = cols & ~(cols << vec3<u32>(1u));
     let tops_above = prev & ~(prev << vec3<u32>(1u));
-    // atlas index of row 0 of this walk at column x - 1
-    let row0 = loff(l) + c.y * w + c.x - 1u;
     // the tops of the runs holding the last row of the walk above (rows
     // -16 .. -1 of this walk), columns x-1, x, x+1
     let up_tops = vec3<i32>(row_of_top(tops_above.x, 15u), row_of_top(tops_above.y, 15u), row_of_top(tops_above.z, 15u)) - vec3<i32>(16);

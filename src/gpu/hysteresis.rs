@@ -60,9 +60,9 @@ impl Pass for HysteresisPass {
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &HysteresisBound, b: &Buffers) {
         // wgpu orders the dispatches of one compute pass (each sees the
         // storage writes of the previous one).
-        // merge walks one column per invocation, compress and final_edges four
-        for (i, (k, g)) in self.kernels.iter().zip(&bound.groups).enumerate() {
-            k.dispatch(pass, g, if i == 0 { b.layout.column_groups() } else { b.layout.quad_groups() });
+        // quad passes: four columns per invocation
+        for (k, g) in self.kernels.iter().zip(&bound.groups) {
+            k.dispatch(pass, g, b.layout.quad_groups());
         }
     }
 
