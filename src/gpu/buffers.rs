@@ -302,10 +302,10 @@ impl Buffers {
         let lim = limits.max_compute_workgroups_per_dimension;
         // keypoint passes are dispatched indirectly with ceil(count / 64) groups
         let gk = layout.capacity.div_ceil(64);
-        // luma (a word per invocation) and the pyramid (a column of a tile
-        // per invocation) dispatch over one level; level 0 is the largest
+        // luma (a word per invocation) and the pyramid (four columns of a
+        // tile per invocation) dispatch over one level; level 0 is the largest
         let [px_, py_, _] = layout.packed_level_groups(0);
-        let [cx, cy, _] = layout.level_column_groups(0);
+        let [cx, cy, _] = layout.level_quad_groups(0);
         let (lx, ly) = (px_.max(cx), py_.max(cy));
         if gx > lim || gy > lim || gz > lim || gk > lim || lx > lim || ly > lim {
             return Err(Error::GpuLimits {

@@ -259,11 +259,11 @@ impl FrameLayout {
         [w.div_ceil(TILE), h.div_ceil(4).div_ceil(TILE), 1]
     }
 
-    /// Workgroups of a column pass over level `l` alone: one column per
+    /// Workgroups of a quad pass over level `l` alone: four columns per
     /// invocation of the 64-invocation workgroup, [`TILE`] rows (shaders/pyramid.wgsl).
-    pub fn level_column_groups(&self, l: usize) -> [u32; 3] {
+    pub fn level_quad_groups(&self, l: usize) -> [u32; 3] {
         let (w, h) = self.sizes[l];
-        [w.div_ceil(COLUMN_TILES * TILE), h.div_ceil(TILE), 1]
+        [w.div_ceil(4 * 64), h.div_ceil(TILE), 1]
     }
 
     /// Range of level `l` in a per-pixel atlas.

@@ -43,7 +43,7 @@ impl Pass for PyramidPass {
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
         for l in 1..b.layout.sizes.len() {
-            self.kernel.dispatch_at(pass, bound, l as u32 * DYNAMIC_STRIDE as u32, b.layout.level_column_groups(l));
+            self.kernel.dispatch_at(pass, bound, l as u32 * DYNAMIC_STRIDE as u32, b.layout.level_quad_groups(l));
         }
     }
 }
