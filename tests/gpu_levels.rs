@@ -30,7 +30,21 @@ fn level0(ctx: &GpuContext, b: &Buffers) -> Vec<u8> {
 fn luma_from_bytes() {
     let Some(ctx) = t::context() else { return };
     let pass = LumaPass::new(&ctx.device);
-    for (w, h, seed) in [(37, 29, 1), (130, 75, 2), (17, 1, 3), (1, 1, 4), (5, 3, 5), (16, 16, 6)] {
+    // every width mod 4 (rows starting at every byte of a word; a quad's last
+    // columns), widths below four, the last row's bytes ending a word or not
+    let sizes = [
+        (37, 29, 1),
+        (130, 75, 2),
+        (17, 1, 3),
+        (1, 1, 4),
+        (5, 3, 5),
+        (16, 16, 6),
+        (2, 7, 7),
+        (3, 5, 8),
+        (71, 18, 9),
+        (6, 1, 10),
+    ];
+    for (w, h, seed) in sizes {
         let b = Buffers::new(&ctx.device, &Config::default(), w, h).unwrap();
         let img = random_bytes((w * h) as usize, seed);
         // the host writes the bytes as they are; the buffer is padded to whole words

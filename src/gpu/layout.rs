@@ -259,6 +259,14 @@ impl FrameLayout {
         [w.div_ceil(TILE), h.div_ceil(4).div_ceil(TILE), 1]
     }
 
+    /// Workgroups of a 16x16 pass over the packed words of level `l` alone,
+    /// four neighbouring words (columns) per invocation (shaders/luma.wgsl
+    /// `from_bytes`).
+    pub fn quad_level_words(&self, l: usize) -> [u32; 3] {
+        let (w, h) = self.sizes[l];
+        [w.div_ceil(4 * TILE), h.div_ceil(4).div_ceil(TILE), 1]
+    }
+
     /// Workgroups of a quad pass over level `l` alone: four columns per
     /// invocation of the 64-invocation workgroup, [`TILE`] rows (shaders/pyramid.wgsl).
     pub fn level_quad_groups(&self, l: usize) -> [u32; 3] {

@@ -104,6 +104,6 @@ impl Pass for LumaPass {
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.bytes.dispatch(pass, bound, b.layout.packed_level_groups(0));
+        self.bytes.dispatch(pass, bound, b.layout.quad_level_words(0));
     }
 }
