@@ -261,9 +261,8 @@ fn run_mask(act: u32, r0: u32) -> u32 {
 // top's root is every pixel's. A loop over the runs' tops: the top's label
 // becomes its root, and the root is marked when any pixel of the run is
 // STRONG. (The other pixels have no label: final_edges reads the tops only.)
-// A quad pass (common.wgsl quad_span), as final_edges: four columns per
-// invocation, their run tops in two loops of two columns each (bit 16 k + r:
-// row r of column x0 + k, resp. x0 + 2 + k).
+// A quad pass (common.wgsl quad_span): four columns per invocation, their
+// run tops in two loops of two columns each (compress_pair).
 @compute @workgroup_size(64, 1, 1)
 fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = quad_span(wg, li);
@@ -273,23 +272,22 @@ fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) 
     let x0 = c.x;
     let m = quad_rows(l, x0, w, c.y);
     let row0 = loff(l) + c.y * w + x0;
-    var t01 = tops2(m[0].x, m[1].x);
-    var t23 = tops2(m[2].x, m[3].x);
-    while (t01 != 0u) {
-        let b = countTrailingZeros(t01);
-        t01 &= t01 - 1u;
-        let k = b >> 4u;
-        let r = b & 15u;
-        let mk = select(m[0], m[1], k == 1u);
-        compress_px(row0 + r * w + k, (mk.y & run_mask(mk.x, r)) != 0u);
-    }
-    while (t23 != 0u) {
-        let b = countTrailingZeros(t23);
-        t23 &= t23 - 1u;
-        let k = b >> 4u;
-        let r = b & 15u;
-        let mk = select(m[2], m[3], k == 1u);
-        compress_px(row0 + r * w + 2u + k, (mk.y & run_mask(mk.x, r)) != 0u);
+    compress_pair(m[0], m[1], row0, w);
+    compress_pair(m[2], m[3], row0 + 2u, w);
+}
+
+// compress for two neighbouring columns of a walk (active_rows a, b; i0 the
+// atlas index of the first column's row 0): one loop over both columns' run
+// tops (bit 16 k + r: row r of column k).
+fn compress_pair(a: vec2<u32>, b: vec2<u32>, i0: u32, w: u32) {
+    var tops = tops2(a.x, b.x);
+    while (tops != 0u) {
+        let bit = countTrailingZeros(tops);
+        tops &= tops - 1u;
+        let k = bit >> 4u;
+        let r = bit & 15u;
+        let mk = select(a, b, k == 1u);
+        compress_px(i0 + r * w + k, (mk.y & run_mask(mk.x, r)) != 0u);
     }
 }
 
@@ -310,9 +308,27 @@ fn tops2(a: u32, b: u32) -> u32 {
     return (a & ~(a << 1u)) | ((b & ~(b << 1u)) << 16u);
 }
 
+// final_edges for two neighbouring columns of a walk (active rows a, b; i0
+// the atlas index of the first column's row 0): their edge rows, column k's
+// in bits 16 k .., from one loop over both columns' run tops.
+fn edge_pair(a: u32, b: u32, i0: u32, w: u32) -> u32 {
+    var tops = tops2(a, b);
+    var e = 0u;
+    while (tops != 0u) {
+        let bit = countTrailingZeros(tops);
+        tops &= tops - 1u;
+        let k = bit >> 4u;
+        let r = bit & 15u;
+        let root = parent(i0 + r * w + k);
+        let edge = ((atomicLoad(&flags[root >> 5u]) >> (root & 31u)) & 1u) != 0u;
+        e |= select(0u, run_mask(select(a, b, k == 1u), r) << (16u * k), edge);
+    }
+    return e;
+}
+
 // Compacted as compress, per run: the flag of each run top's root (after
 // compress its parent) for the whole run, then the columns' packed words of
-// `edges`. A quad pass (common.wgsl quad_span), as compress.
+// `edges`. A quad pass (common.wgsl quad_span), as compress (edge_pair).
 @compute @workgroup_size(64, 1, 1)
 fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let c = quad_span(wg, li);
@@ -321,33 +337,9 @@ fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_i
     let w = lw(l);
     let x0 = c.x;
     let m = quad_rows(l, x0, w, c.y);
-    let a0 = m[0].x;
-    let a1 = m[1].x;
-    let a2 = m[2].x;
-    let a3 = m[3].x;
-    var t01 = tops2(a0, a1);
-    var t23 = tops2(a2, a3);
-    var e01 = 0u;
-    var e23 = 0u;
     let row0 = loff(l) + c.y * w + x0;
-    while (t01 != 0u) {
-        let b = countTrailingZeros(t01);
-        t01 &= t01 - 1u;
-        let k = b >> 4u;
-        let r = b & 15u;
-        let root = parent(row0 + r * w + k);
-        let act = select(a0, a1, k == 1u);
-        e01 |= select(0u, run_mask(act, r) << (16u * k), ((atomicLoad(&flags[root >> 5u]) >> (root & 31u)) & 1u) != 0u);
-    }
-    while (t23 != 0u) {
-        let b = countTrailingZeros(t23);
-        t23 &= t23 - 1u;
-        let k = b >> 4u;
-        let r = b & 15u;
-        let root = parent(row0 + r * w + 2u + k);
-        let act = select(a2, a3, k == 1u);
-        e23 |= select(0u, run_mask(act, r) << (16u * k), ((atomicLoad(&flags[root >> 5u]) >> (root & 31u)) & 1u) != 0u);
-    }
+    let e01 = edge_pair(m[0].x, m[1].x, row0, w);
+    let e23 = edge_pair(m[2].x, m[3].x, row0 + 2u, w);
     // `edges` is column-packed as `ruled`: bit r of column k's edge rows ->
     // 255 at row c.y + r. The walk's words in a loop (see median.wgsl).
     for (var y = c.y; y < c.z; y += 4u) {

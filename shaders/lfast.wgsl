@@ -223,14 +223,19 @@ fn column_window(l: u32, x: u32, y0: u32, w: u32, h: u32, b: u32, tested: u32) -
     return select(0u, (bits >> 8u) & tested, x >= b && x + b < w);
 }
 
-// Entry `args`, one invocation: the indirect args of `main` over the edge
-// list, ceil(n / 64) workgroups as (x, y, 1), x <= 65535.
+// The indirect args over the list counted in counters[c] into indirect[i ..
+// i + 3]: ceil(n / 64) workgroups as (x, y, 1), x <= 65535.
+fn write_list_args(c: u32, i: u32) {
+    let g = list_args(atomicLoad(&counters[c]));
+    indirect[i] = g.x;
+    indirect[i + 1u] = g.y;
+    indirect[i + 2u] = g.z;
+}
+
+// Entry `args`, one invocation: the indirect args of `main` over the edge list.
 @compute @workgroup_size(1, 1, 1)
 fn args() {
-    let g = list_args(atomicLoad(&counters[C_EDGES]));
-    indirect[I_EDGES] = g.x;
-    indirect[I_EDGES + 1u] = g.y;
-    indirect[I_EDGES + 2u] = g.z;
+    write_list_args(C_EDGES, I_EDGES);
 }
 
 // Entry `main`, work-efficient: one invocation per listed edge pixel, by
@@ -254,11 +259,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
 }
 
 // Entry `cand_args`, one invocation after `main`: the indirect args over the
-// candidate list, ceil(n / 64) workgroups as (x, y, 1), x <= 65535.
+// candidate list.
 @compute @workgroup_size(1, 1, 1)
 fn cand_args() {
-    let g = list_args(atomicLoad(&counters[C_CANDS]));
-    indirect[I_CANDS] = g.x;
-    indirect[I_CANDS + 1u] = g.y;
-    indirect[I_CANDS + 2u] = g.z;
+    write_list_args(C_CANDS, I_CANDS);
 }
