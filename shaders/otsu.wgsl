@@ -2,8 +2,9 @@
 // GPU picks exactly the k of the CPU. Mirrors src/cpu/otsu.rs; tests:
 // tests/gpu_edges_front.rs (709 random histograms, ties, 2^28 totals).
 // hist -> otsu[l] = k + 1 (T1), or 0 when the level has no edges (at most one
-// non-empty bin). One workgroup per level (workgroup_id.x), invocation k
-// evaluates the split at k, then a tree reduction keeps the best k.
+// non-empty bin). One workgroup per level (workgroup_id.x) of 64
+// invocations; invocation t evaluates the splits at 4t .. 4t + 3, then a
+// tree reduction keeps the best k.
 //
 // WGSL has no u64/u128, so the numbers of src/cpu/otsu.rs are little-endian
 // u32 limbs of fixed width, in straight-line code (no dynamically indexed
@@ -12,7 +13,8 @@
 // Σ i*h[i] < 2^36 (two), n*s0 and n0*sum < 2^64 * 2^28 (three),
 // d = |n*s0 - n0*sum| < 2^62 (two), num = d^2 < 2^124 (four), den = n0*n1
 // < 2^56 (two), and the cross products num*bden < 2^180 (six): all exact.
-// n0 and s0 come from a workgroup prefix sum (Hillis-Steele, 8 steps).
+// n0 and s0 come from a workgroup prefix sum (Hillis-Steele over the 64
+// invocations' sums of four bins, 6 steps).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/otsu.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> hist: array<u32>;
@@ -121,80 +123,99 @@ fn cmp192(a: U192, b: U192) -> i32 {
     return cmp96(a.lo, b.lo);
 }
 
-// The prefix sums: counts (n0) and moments (s0, 64-bit) of bins 0..=k.
-var<workgroup> scan_n: array<u32, 256>;
-var<workgroup> scan_s: array<vec2<u32>, 256>;
+// Per invocation t (bins 4t .. 4t + 3): the count and moment (64-bit) of
+// its bins, then (after the scan) of bins 0 .. 4t - 1.
+var<workgroup> scan_n: array<u32, 64>;
+var<workgroup> scan_s: array<vec2<u32>, 64>;
 // Per slot of the reduction: the candidate's k (NO_K = none), num (4 limbs), den (2 limbs).
-var<workgroup> red_k: array<u32, 256>;
-var<workgroup> red_num: array<vec4<u32>, 256>;
-var<workgroup> red_den: array<vec2<u32>, 256>;
+var<workgroup> red_k: array<u32, 64>;
+var<workgroup> red_num: array<vec4<u32>, 64>;
+var<workgroup> red_den: array<vec2<u32>, 64>;
 
 const NO_K: u32 = 0xffffffffu;
 
-// Does candidate slot j beat slot i? Larger num/den (as num_j*den_i > num_i*den_j,
-// src/cpu/otsu.rs's cross products), then the smaller k: the CPU's scan keeps
-// the first maximum, i.e. the smallest k among exact ties.
-fn beats(j: u32, i: u32) -> bool {
-    if (red_k[j] == NO_K) { return false; }
-    if (red_k[i] == NO_K) { return true; }
-    let c = cmp192(mul_128x64(red_num[j], red_den[i]), mul_128x64(red_num[i], red_den[j]));
-    return c > 0 || (c == 0 && red_k[j] < red_k[i]);
+// Does candidate (kj, num_j, den_j) beat (ki, num_i, den_i)? Larger num/den
+// (as num_j*den_i > num_i*den_j, src/cpu/otsu.rs's cross products), then the
+// smaller k: the CPU's scan keeps the first maximum, i.e. the smallest k
+// among exact ties.
+fn beats(kj: u32, num_j: vec4<u32>, den_j: vec2<u32>, ki: u32, num_i: vec4<u32>, den_i: vec2<u32>) -> bool {
+    if (kj == NO_K) { return false; }
+    if (ki == NO_K) { return true; }
+    let c = cmp192(mul_128x64(num_j, den_i), mul_128x64(num_i, den_j));
+    return c > 0 || (c == 0 && kj < ki);
 }
 
-@compute @workgroup_size(256, 1, 1)
-fn main(@builtin(local_invocation_index) k: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+// 64 invocations, four bins each (256 with one bin each waited at ~26
+// barriers, which lavapipe pays per SIMD group of 8: 32 groups a level).
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(local_invocation_index) t: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let l = wg.x;
     if (l >= P.n_levels) { return; }
-    let hk = hist[l * 256u + k];
-    scan_n[k] = hk;
-    scan_s[k] = mul32(k, hk);
+    let h = vec4<u32>(hist[l * 256u + 4u * t], hist[l * 256u + 4u * t + 1u], hist[l * 256u + 4u * t + 2u], hist[l * 256u + 4u * t + 3u]);
+    // this invocation's bins' count and moment (k * h[k] < 2^36: 64-bit sums)
+    var sn = h.x + h.y + h.z + h.w;
+    var ss = add64(add64(mul32(4u * t, h.x), mul32(4u * t + 1u, h.y)), add64(mul32(4u * t + 2u, h.z), mul32(4u * t + 3u, h.w)));
+    scan_n[t] = sn;
+    scan_s[t] = ss;
     workgroupBarrier();
-    // inclusive prefix sums: no carry out of 32 bits for n (<= 2^28) nor of 64 for s
-    for (var off = 1u; off < 256u; off <<= 1u) {
-        var vn = scan_n[k];
-        var vs = scan_s[k];
-        if (k >= off) {
-            vn += scan_n[k - off];
-            vs = add64(vs, scan_s[k - off]);
+    // inclusive prefix sums over the 64 (Hillis-Steele, 6 steps): no carry
+    // out of 32 bits for n (<= 2^28) nor of 64 for s
+    for (var off = 1u; off < 64u; off <<= 1u) {
+        var vn = scan_n[t];
+        var vs = scan_s[t];
+        if (t >= off) {
+            vn += scan_n[t - off];
+            vs = add64(vs, scan_s[t - off]);
         }
         workgroupBarrier();
-        scan_n[k] = vn;
-        scan_s[k] = vs;
+        scan_n[t] = vn;
+        scan_s[t] = vs;
         workgroupBarrier();
     }
-    let n = scan_n[255];
-    let sum = scan_s[255];
-    let n0 = scan_n[k];
-    let s0 = scan_s[k];
-    let n1 = n - n0;
-    // k runs over 0..255 (exclusive) on the CPU; 255 always has n1 == 0.
-    var my_k = NO_K;
-    var num = vec4(0u);
-    var den = vec2(0u);
-    if (k < 255u && n0 != 0u && n1 != 0u) {
-        // d = |n*s0 - n0*sum| < 2^62, num = d^2, den = n0*n1
-        let p = mul_32x64(n, s0);
-        let q = mul_32x64(n0, sum);
-        var d: vec3<u32>;
-        if (cmp96(p, q) >= 0) { d = sub96(p, q); } else { d = sub96(q, p); }
-        num = mul_64x64(d.xy, d.xy);
-        den = mul32(n0, n1);
-        my_k = k;
+    let n = scan_n[63];
+    let sum = scan_s[63];
+    // bins 0 .. 4t - 1
+    var n0 = select(0u, scan_n[max(t, 1u) - 1u], t > 0u);
+    var s0 = select(vec2<u32>(0u), scan_s[max(t, 1u) - 1u], t > 0u);
+    // the best of this invocation's four splits (a loop bounded by t, so the
+    // compiler keeps one copy of the arithmetic)
+    var best_k = NO_K;
+    var best_num = vec4(0u);
+    var best_den = vec2(0u);
+    for (var k = 4u * t; k < 4u * t + 4u; k++) {
+        let hk = hist[l * 256u + k];
+        n0 += hk;
+        s0 = add64(s0, mul32(k, hk));
+        let n1 = n - n0;
+        // k runs over 0..255 (exclusive) on the CPU; 255 always has n1 == 0.
+        if (k < 255u && n0 != 0u && n1 != 0u) {
+            // d = |n*s0 - n0*sum| < 2^62, num = d^2, den = n0*n1
+            let p = mul_32x64(n, s0);
+            let q = mul_32x64(n0, sum);
+            var d: vec3<u32>;
+            if (cmp96(p, q) >= 0) { d = sub96(p, q); } else { d = sub96(q, p); }
+            let num = mul_64x64(d.xy, d.xy);
+            let den = mul32(n0, n1);
+            if (beats(k, num, den, best_k, best_num, best_den)) {
+                best_k = k;
+                best_num = num;
+                best_den = den;
+            }
+        }
     }
-    red_k[k] = my_k;
-    red_num[k] = num;
-    red_den[k] = den;
+    red_k[t] = best_k;
+    red_num[t] = best_num;
+    red_den[t] = best_den;
     workgroupBarrier();
-
-    for (var stride = 128u; stride > 0u; stride >>= 1u) {
-        if (k < stride && beats(k + stride, k)) {
-            red_k[k] = red_k[k + stride];
-            red_num[k] = red_num[k + stride];
-            red_den[k] = red_den[k + stride];
+    for (var stride = 32u; stride > 0u; stride >>= 1u) {
+        if (t < stride && beats(red_k[t + stride], red_num[t + stride], red_den[t + stride], red_k[t], red_num[t], red_den[t])) {
+            red_k[t] = red_k[t + stride];
+            red_num[t] = red_num[t + stride];
+            red_den[t] = red_den[t + stride];
         }
         workgroupBarrier();
     }
-    if (k == 0u) {
+    if (t == 0u) {
         otsu[l] = select(red_k[0] + 1u, 0u, red_k[0] == NO_K);
     }
 }
