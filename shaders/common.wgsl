@@ -185,6 +185,16 @@ fn six_columns(x0: u32, w: u32) -> Six {
     );
 }
 
+// Which of columns x0 - 1 .. x0 + 4 lie in a level of width w: all ones for
+// those that do, 0 for the others (a mask for their words, or a flag).
+fn six_inside(x0: u32, w: u32) -> Six {
+    let c = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
+    return Six(
+        select(vec4<u32>(0u), vec4<u32>(0xffffffffu), (c >= vec4<u32>(1u)) & (c <= vec4<u32>(w))),
+        select(vec2<u32>(0u), vec2<u32>(0xffffffffu), vec2<u32>(x0 + 3u, x0 + 4u) < vec2<u32>(w)),
+    );
+}
+
 // Columns x0 + k - 1, x0 + k, x0 + k + 1 of a Six: output column k's
 // neighbourhood (k constant at every call, so the switch folds away).
 fn tri(s: Six, k: u32) -> vec3<u32> {
@@ -207,15 +217,6 @@ fn six_select(b: Six, a: Six, yes: bool) -> Six {
     return Six(select(b.a, a.a, yes), select(b.b, a.b, yes));
 }
 
-// The first row of word k (rows 4k .. 4k + 3 of the walk) of a walk over rows
-// [y0, end), y0 a multiple of 4; a word past the walk's end (a level's last,
-// partial tile) is its last word again. Walks write their (at most four)
-// words out rather than loop, and a repeated word is stored again at its own
-// place: no store under `if`, none in the next level.
-fn walk_word(y0: u32, end: u32, k: u32) -> u32 {
-    return min(y0 + 4u * k, (end - 1u) & ~3u);
-}
-
 // Column-packed 8-bit planes (`classes`, `ruled`; FrameLayout::packed_offsets,
 // gpu::layout::pack_level): word (y / 4) * w + x of level l holds rows
 // 4 (y / 4) .. + 4 of column x, row y in bits 8 (y % 4) .. + 8. A column walk
@@ -225,8 +226,7 @@ fn pk_word(l: u32, x: u32, y: u32) -> u32 { return P.tiles[l].w + (y >> 2u) * lw
 fn pk_byte(word: u32, y: u32) -> u32 { return (word >> ((y & 3u) * 8u)) & 0xffu; }
 // Row y's value v in its place of a word being built (OR the four rows together).
 fn pk_place(v: u32, y: u32) -> u32 { return v << ((y & 3u) * 8u); }
-// pk_byte of the words of three or four neighbouring columns, at row y.
-fn pk_byte3(words: vec3<u32>, y: u32) -> vec3<u32> { return (words >> vec3<u32>((y & 3u) * 8u)) & vec3<u32>(0xffu); }
+// pk_byte of the words of four neighbouring columns, at row y.
 fn pk_byte4(words: vec4<u32>, y: u32) -> vec4<u32> { return (words >> vec4<u32>((y & 3u) * 8u)) & vec4<u32>(0xffu); }
 // All four rows of a word: row 4k + r in component r.
 fn pk_rows(word: u32) -> vec4<u32> { return (vec4<u32>(word) >> vec4<u32>(0u, 8u, 16u, 24u)) & vec4<u32>(0xffu); }

@@ -155,11 +155,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let h = lh(l);
     let w = lw(l);
     // which of columns x0 - 1 .. x0 + 4 lie in the level
-    let c = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
-    let cols = Six(
-        select(vec4<u32>(0u), vec4<u32>(1u), (c >= vec4<u32>(1u)) & (c <= vec4<u32>(w))),
-        select(vec2<u32>(0u), vec2<u32>(1u), vec2<u32>(x0 + 3u, x0 + 4u) < vec2<u32>(w)),
-    );
+    let cols = six_inside(x0, w);
     // S of row y0 - 1 (none above row 0), gradients and S of row y0
     var cur = d7_words(l, x0, span.y);
     var walk: Walk;

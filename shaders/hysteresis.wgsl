@@ -165,11 +165,7 @@ fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     // rows past the level's last are clear), and those of the walk above
     // (none above row 0)
     let cols = six_columns(x0, w);
-    let cx = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
-    let inside = Six(
-        select(vec4<u32>(0u), vec4<u32>(0xffffffffu), (cx >= vec4<u32>(1u)) & (cx <= vec4<u32>(w))),
-        select(vec2<u32>(0u), vec2<u32>(0xffffffffu), vec2<u32>(x0 + 3u, x0 + 4u) < vec2<u32>(w)),
-    );
+    let inside = six_inside(x0, w);
     let cur = six_active(l, cols, inside, ty);
     let above = six_active(l, cols, Six(inside.a * u32(ty > 0u), inside.b * u32(ty > 0u)), max(ty, 1u) - 1u);
     // atlas index of row 0 of this walk at column x0 - 1

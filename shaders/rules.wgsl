@@ -85,12 +85,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let x0 = span.x;
     let w = lw(l);
     let cols = six_columns(x0, w);
-    // columns x0 - 1 .. x0 + 4 inside the level: all ones
-    let c = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
-    let inside = Six(
-        select(vec4<u32>(0u), vec4<u32>(0xffffffffu), (c >= vec4<u32>(1u)) & (c <= vec4<u32>(w))),
-        select(vec2<u32>(0u), vec2<u32>(0xffffffffu), vec2<u32>(x0 + 3u, x0 + 4u) < vec2<u32>(w)),
-    );
+    let inside = six_inside(x0, w);
     let y0 = i32(span.y);  // a multiple of 4: the first row of its words
     let end = i32(span.z);
     var a = six_bytes(six_words(l, cols, inside, y0 - 1), u32(y0 - 1));
