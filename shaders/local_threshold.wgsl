@@ -16,9 +16,10 @@
 //   work (the windows holding the cell, the barrier, the bins' walk) costs
 //   every SIMD group of a workgroup on lavapipe: one invocation per bin
 //   (256) took 57 ms per frame, 32 took 8.8 ms, 8 (one SIMD group) 7.2.
-// - stats: one workgroup per window, workgroup_id = (i, j, level), dispatch
-//   (max nx, max ny, n_levels): stats_of over the window's histogram.
-// Groups beyond a level's cells or windows return at once. `window_hist` and
+// - stats: one invocation per window (64 a workgroup, dispatched over the
+//   windows of all levels): stats_of over the window's histogram.
+// Groups beyond a level's cells and invocations beyond the last window
+// return at once. `window_hist` and
 // `hist` are cleared by the pass before it runs.
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/local_threshold.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
@@ -47,36 +48,70 @@ fn holding(o: u32, n: u32, size: u32, c0: u32, c1: u32) -> vec2<u32> {
     return r;
 }
 
-// Counts value v (< 32) in the register counters when `yes`: 8-bit counters
-// four a word, v in byte v % 4 of component (v / 4) % 4 of c0 (v < 16) or c1.
-fn count_small(c0: ptr<function, vec4<u32>>, c1: ptr<function, vec4<u32>>, v: u32, yes: bool) {
-    let inc = vec4<u32>(select(0u, 1u << ((v & 3u) * 8u), yes));
-    let q = vec4<u32>(v >> 2u);
-    *c0 += select(vec4<u32>(0u), inc, q == vec4<u32>(0u, 1u, 2u, 3u));
-    *c1 += select(vec4<u32>(0u), inc, q == vec4<u32>(4u, 5u, 6u, 7u));
+// Bit-sliced counters of the values below 32: bit v of plane k is bit k of
+// value v's count, planes 0..3 in `lo`, 4..7 in `hi` (counts < 256). A
+// word's four values are added to all 32 counters at once with ~30
+// bitwise operations, where 8-bit counters four a word took ~100 (a
+// compare, a select and an add per counter word and value).
+struct Slices {
+    lo: vec4<u32>,
+    hi: vec4<u32>,
 }
 
-// Adds the register counters to the workgroup's bins and clears them: a
-// `while` loop over the non-zero ones.
-fn flush_small(c0: ptr<function, vec4<u32>>, c1: ptr<function, vec4<u32>>) {
-    let a = *c0;
-    let b = *c1;
-    let zero = vec4<u32>(0u);
-    var nz = bits4(pk_rows(a.x) != zero) | (bits4(pk_rows(a.y) != zero) << 4u) | (bits4(pk_rows(a.z) != zero) << 8u)
-        | (bits4(pk_rows(a.w) != zero) << 12u) | (bits4(pk_rows(b.x) != zero) << 16u)
-        | (bits4(pk_rows(b.y) != zero) << 20u) | (bits4(pk_rows(b.z) != zero) << 24u)
-        | (bits4(pk_rows(b.w) != zero) << 28u);
+// Adds the one-hot masks o (bit v for value v, 0 for none) of a word's four
+// values to the counters.
+fn count_word(s: ptr<function, Slices>, o: vec4<u32>) {
+    // the four masks' sum per bin in three planes b0 + 2 b1 + 4 b2 (a full
+    // adder of o.x, o.y, o.z, a half adder with o.w, a half adder of the carries)
+    let x01 = o.x ^ o.y;
+    let s3 = x01 ^ o.z;
+    let c3 = (o.x & o.y) | (x01 & o.z);
+    let b0 = s3 ^ o.w;
+    let c4 = s3 & o.w;
+    let b1 = c3 ^ c4;
+    let b2 = c3 & c4;
+    // ripple-carry add into the eight planes
+    var a = (*s).lo;
+    var h = (*s).hi;
+    let k1 = a.x & b0;
+    a.x ^= b0;
+    var t = a.y ^ b1;
+    let k2 = (a.y & b1) | (t & k1);
+    a.y = t ^ k1;
+    t = a.z ^ b2;
+    var k = (a.z & b2) | (t & k2);
+    a.z = t ^ k2;
+    t = a.w & k;
+    a.w ^= k;
+    k = t;
+    t = h.x & k;
+    h.x ^= k;
+    k = t;
+    t = h.y & k;
+    h.y ^= k;
+    k = t;
+    t = h.z & k;
+    h.z ^= k;
+    h.w ^= t;  // no carry out: the counters are flushed before one reaches 256
+    (*s).lo = a;
+    (*s).hi = h;
+}
+
+// Adds the counters to the workgroup's bins and clears them: a `while` loop
+// over the non-zero ones.
+fn flush_slices(s: ptr<function, Slices>) {
+    let a = (*s).lo;
+    let h = (*s).hi;
+    var nz = a.x | a.y | a.z | a.w | h.x | h.y | h.z | h.w;
     while (nz != 0u) {
         let v = firstTrailingBit(nz);
         nz &= nz - 1u;
-        // word v / 4 by selects (a private array indexed per lane is a gather)
-        let q = v >> 2u;
-        let wa = select(select(a.x, a.y, q == 1u), select(a.z, a.w, q == 3u), q >= 2u);
-        let wb = select(select(b.x, b.y, q == 5u), select(b.z, b.w, q == 7u), q >= 6u);
-        atomicAdd(&bins[v], pk_byte(select(wa, wb, q >= 4u), v));
+        let lo = (a >> vec4<u32>(v)) & vec4<u32>(1u);
+        let hi = (h >> vec4<u32>(v)) & vec4<u32>(1u);
+        atomicAdd(&bins[v], dot(lo, vec4<u32>(1u, 2u, 4u, 8u)) + dot(hi, vec4<u32>(16u, 32u, 64u, 128u)));
     }
-    *c0 = zero;
-    *c1 = zero;
+    (*s).lo = vec4<u32>(0u);
+    (*s).hi = vec4<u32>(0u);
 }
 
 // Invocations of a `cells` workgroup (its columns' stride, its bins' stride).
@@ -105,22 +140,22 @@ fn cells(
         win = vec4<u32>(wx, wy);
     }
     // Columns li, li + 8, ... of the cell, each down its rows a word (four
-    // rows, `m` is column-packed) at a time. Values below 32 (~95% of the
-    // pixels of a KITTI frame) are counted in registers, 8-bit counters four
-    // a word (count_small), and added to the workgroup's bins when a counter
-    // could overflow and at the end; the other rows of a word are bits, whose
+    // rows, `m` is column-packed) at a time. Values below 32 (~96% of the
+    // pixels of a KITTI frame) are counted in registers, bit-sliced
+    // (count_word), and added to the workgroup's bins when a counter could
+    // overflow and at the end (flush_slices); 32 more bins in a second set of
+    // planes were 20% slower (register spills); the other rows of a word are bits, whose
     // atomics run in a `while` loop as often as the busiest lane of the SIMD
     // group needs (an atomic under a per-row `if` costs every lane every row
     // on a SIMD software rasteriser).
-    var c0 = vec4<u32>(0u);
-    var c1 = vec4<u32>(0u);
+    var sl: Slices;
     // pixels counted in registers since the last flush (a word adds <= 4, so
     // an `if` empties them in time: a `while` costs its loop masks every word)
     var pending = 0u;
     for (var x = x0 + li; x < x1; x += CELL_INVOCATIONS) {
         for (var g4 = y0 >> 2u; g4 * 4u < y1; g4++) {
             if (pending > 251u) {
-                flush_small(&c0, &c1);
+                flush_slices(&sl);
                 pending = 0u;
             }
             // rows a..b (of the word's four) inside the cell, a contiguous range
@@ -130,10 +165,8 @@ fn cells(
             let word = m[pk_word(l, x, g4 * 4u)];
             let v = pk_rows(word);
             let small = v < vec4<u32>(32u);
-            count_small(&c0, &c1, v.x, (inside & 1u) != 0u && small.x);
-            count_small(&c0, &c1, v.y, (inside & 2u) != 0u && small.y);
-            count_small(&c0, &c1, v.z, (inside & 4u) != 0u && small.z);
-            count_small(&c0, &c1, v.w, (inside & 8u) != 0u && small.w);
+            let rows = (vec4<u32>(inside) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
+            count_word(&sl, select(vec4<u32>(0u), vec4<u32>(1u) << v, rows & small));
             pending += 4u;
             var big = inside & ~bits4(small);
             while (big != 0u) {
@@ -143,7 +176,7 @@ fn cells(
             }
         }
     }
-    flush_small(&c0, &c1);
+    flush_slices(&sl);
     workgroupBarrier();
     let r = win;
     // bins li, li + 8, ...: the non-empty ones as bits, added in a `while`
@@ -169,73 +202,46 @@ fn cells(
     }
 }
 
-// stats' reductions: 256 - (lowest non-empty bin), 1 + (highest), the sums
-// of the 16 runs of 16 bins.
-var<workgroup> lo_inv: atomic<u32>;
-var<workgroup> hi_1: atomic<u32>;
-var<workgroup> part: array<u32, 16>;
-
-// 8 invocations (one SIMD group of lavapipe), as cells: 32 took 0.3 ms more
-// per KITTI frame there.
-@compute @workgroup_size(8, 1, 1)
-fn stats(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    let l = wg.z;
+// One invocation per window, t = the window's index over all levels
+// (P.levels[l].w is level l's first), 64 a workgroup, no workgroup memory
+// and no barrier: stats_of in src/cpu/local_threshold.rs over the window's
+// histogram, bin by bin. The walk stops once it has counted the window's
+// a*b pixels (every bin after is empty). A workgroup per window, its 8
+// invocations summing runs of bins for one to walk, took ~0.7 ms per KITTI
+// frame on lavapipe: each of ~720 workgroups paid its barrier and
+// workgroup memory.
+@compute @workgroup_size(64, 1, 1)
+fn stats(@builtin(global_invocation_id) id: vec3<u32>) {
+    let t = id.x;
+    var l = 0u;
+    for (var k = 1u; k < P.n_levels; k++) {
+        if (t >= P.levels[k].w) { l = k; }
+    }
     let g = P.grids[l];
-    let nx = g.x;
-    let ny = g.y;
-    let i = wg.x;
-    let j = wg.y;
-    // Workgroup-uniform: the barriers below are reached by all or none.
-    if (l >= P.n_levels || i >= nx || j >= ny) { return; }
-    let base = (P.levels[l].w + j * nx + i) * 256u;
-    // runs 2 li and 2 li + 1 of 16 bins into workgroup memory (loops bounded
-    // by li: see cells); this invocation's lowest non-empty bin and 1 + its
-    // highest (0: none)
+    if (l >= P.n_levels || t >= P.levels[l].w + g.x * g.y) { return; }
+    // over n = a*b > 0 pixels the lower median is the first bin where the
+    // running count passes (n - 1) / 2
+    let n = (g.w & 0xffffu) * (g.w >> 16u);
+    let half = (max(n, 1u) - 1u) / 2u;  // `target` on the CPU (a WGSL keyword)
+    let base = t * 256u;
+    var acc = 0u;
     var lo = 256u;
     var hi = 0u;
-    for (var r = 2u * li; r < 2u * li + 2u; r++) {
-        var sum = 0u;
-        for (var k = r * 16u; k < r * 16u + 16u; k++) {
-            let c = atomicLoad(&window_hist[base + k]);
-            atomicStore(&bins[k], c);
-            sum += c;
-            if (c != 0u) {
-                lo = min(lo, k);
-                hi = k + 1u;
-            }
-        }
-        part[r] = sum;
+    var median = 256u;
+    // bounded by `base`: a constant trip count is unrolled by lavapipe's compiler
+    for (var k = base; k < base + 256u && acc < n; k++) {
+        let c = atomicLoad(&window_hist[k]);
+        let bin = k - base;
+        lo = select(lo, bin, c != 0u && lo == 256u);
+        hi = select(hi, bin, c != 0u);
+        acc += c;
+        median = select(median, bin, acc > half && median == 256u);
     }
-    if (hi != 0u) {
-        atomicMax(&lo_inv, 256u - lo);
-        atomicMax(&hi_1, hi);
-    }
-    workgroupBarrier();
-    if (li == 0u) {
-        // stats_of in src/cpu/local_threshold.rs over n = a*b > 0 pixels: the
-        // lower median is the first bin where the running count passes
-        // (n - 1) / 2, found run by run, then bin by bin.
-        let n = (g.w & 0xffffu) * (g.w >> 16u);
-        let half = (max(n, 1u) - 1u) / 2u;  // `target` on the CPU (a WGSL keyword)
-        var acc = 0u;
-        var run = 0u;
-        while (run < 15u && acc + part[run] <= half) {
-            acc += part[run];
-            run++;
-        }
-        // a window holds a*b >= 1 pixels, so the count passes `half` by bin 255
-        var median = run * 16u;
-        loop {
-            acc += atomicLoad(&bins[median]);
-            if (acc > half || median == 255u) { break; }
-            median++;
-        }
-        let lo = 256u - atomicLoad(&lo_inv);
-        let hi = atomicLoad(&hi_1) - 1u;
-        let o = (P.levels[l].w + j * nx + i) * 4u;
-        windows[o] = lo;
-        windows[o + 1u] = hi;
-        windows[o + 2u] = median;
-        windows[o + 3u] = hi + median + lo;  // V3 = max + median + min
-    }
+    // a window holds a*b >= 1 pixels, so the count passes `half` by bin 255
+    median = min(median, 255u);
+    let o = t * 4u;
+    windows[o] = lo;
+    windows[o + 1u] = hi;
+    windows[o + 2u] = median;
+    windows[o + 3u] = hi + median + lo;  // V3 = max + median + min
 }

@@ -295,13 +295,6 @@ impl FrameLayout {
         let o = self.packed_offsets[l] as usize;
         o..o + (w * h.div_ceil(4)) as usize
     }
-
-    /// Most windows of any level along x and y.
-    pub fn max_windows(&self) -> (u32, u32) {
-        let nx = self.grids.iter().map(|g| g.xs.len() as u32).max().unwrap_or(0);
-        let ny = self.grids.iter().map(|g| g.ys.len() as u32).max().unwrap_or(0);
-        (nx, ny)
-    }
 }
 
 /// A `w x h` level of 8-bit values (row-major, `w * h` of them) as the

@@ -58,8 +58,7 @@ impl Pass for LocalThresholdPass {
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
         let (cx, cy) = b.layout.max_cells;
         self.cells.dispatch(pass, bound, [cx, cy, b.layout.n_levels()]);
-        let (nx, ny) = b.layout.max_windows();
-        self.stats.dispatch(pass, bound, [nx, ny, b.layout.n_levels()]);
+        self.stats.dispatch(pass, bound, [b.layout.total_windows.div_ceil(64), 1, 1]);
     }
 
     fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
