@@ -170,16 +170,28 @@ fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     let above = six_active(l, cols, Six(inside.a * u32(ty > 0u), inside.b * u32(ty > 0u)), max(ty, 1u) - 1u);
     // atlas index of row 0 of this walk at column x0 - 1
     let row0 = loff(l) + c.y * w + x0 - 1u;
-    merge_column(tri(cur, 0u), tri(above, 0u), row0, w);
-    merge_column(tri(cur, 1u), tri(above, 1u), row0 + 1u, w);
-    merge_column(tri(cur, 2u), tri(above, 2u), row0 + 2u, w);
-    merge_column(tri(cur, 3u), tri(above, 3u), row0 + 3u, w);
+    merge_pair(merge_rows(tri(cur, 0u), tri(above, 0u)), merge_rows(tri(cur, 1u), tri(above, 1u)), row0, w);
+    merge_pair(merge_rows(tri(cur, 2u), tri(above, 2u)), merge_rows(tri(cur, 3u), tri(above, 3u)), row0 + 2u, w);
 }
 
-// The unions of one column x of a quad walk: `cols` the active rows of
-// columns x-1, x, x+1 in this walk, `prev` in the walk above, `row0` the
-// atlas index of row 0 of column x - 1.
-fn merge_column(cols: vec3<u32>, prev: vec3<u32>, row0: u32, w: u32) {
+// What one column x of a quad walk unites (merge_rows): which rows join U
+// (`u`), L (`l`) or UL (`ul`) and which UR as well (`ur`), bits 0..15; the
+// run tops of columns x - 1 and x + 1 (`tops_l`, `tops_r`); the rows (-16 ..
+// -1, in the walk above) of the tops of the runs holding the last row of the
+// walk above in columns x - 1, x, x + 1 (`up_tops`).
+struct Unions {
+    u: u32,
+    l: u32,
+    ul: u32,
+    ur: u32,
+    tops_l: u32,
+    tops_r: u32,
+    up_tops: vec3<i32>,
+}
+
+// The unions of column x: `cols` the active rows of columns x-1, x, x+1 in
+// this walk, `prev` in the walk above.
+fn merge_rows(cols: vec3<u32>, prev: vec3<u32>) -> Unions {
     let above = prev >> vec3<u32>(15u);
     // every row's neighbours at once, as bits: up-left, up, up-right
     let ups = ((cols << vec3<u32>(1u)) | above) & vec3<u32>(0xffffu);
@@ -187,33 +199,53 @@ fn merge_column(cols: vec3<u32>, prev: vec3<u32>, row0: u32, w: u32) {
     // the decision tree, row by row in parallel: U alone when active (a
     // union only at row 0, U in the walk above; below, U is the same run);
     // else L, else UL, and UR as a second union
-    let by_u = act & ups.y & 1u;
-    let by_l = act & ~ups.y & cols.x;
-    let by_ul = act & ~ups.y & ~cols.x & ups.x;
-    let ur = act & ~ups.y & ups.z;
-    var rows = by_u | by_l | by_ul | ur;
     // the first rows of the vertical runs of this walk and the one above
     let tops = cols & ~(cols << vec3<u32>(1u));
     let tops_above = prev & ~(prev << vec3<u32>(1u));
-    // the tops of the runs holding the last row of the walk above (rows
-    // -16 .. -1 of this walk), columns x-1, x, x+1
-    let up_tops = vec3<i32>(row_of_top(tops_above.x, 15u), row_of_top(tops_above.y, 15u), row_of_top(tops_above.z, 15u)) - vec3<i32>(16);
+    return Unions(
+        act & ups.y & 1u,
+        act & ~ups.y & cols.x,
+        act & ~ups.y & ~cols.x & ups.x,
+        act & ~ups.y & ups.z,
+        tops.x,
+        tops.z,
+        vec3<i32>(row_of_top(tops_above.x, 15u), row_of_top(tops_above.y, 15u), row_of_top(tops_above.z, 15u)) - vec3<i32>(16),
+    );
+}
+
+// The unions of two neighbouring columns of a quad walk (`a`, `b`; `row0` the
+// atlas index of row 0 of the column left of `a`), in one loop over both
+// columns' rows (bit 16 k + r: row r of column k), as compress_pair: a
+// SIMD software rasteriser runs a loop as often as its busiest lane needs,
+// so one loop over the pair costs at most what one per column did.
+fn merge_pair(a: Unions, b: Unions, row0: u32, w: u32) {
+    let by_u = a.u | (b.u << 16u);
+    let by_l = a.l | (b.l << 16u);
+    let by_ul = a.ul | (b.ul << 16u);
+    let ur = a.ur | (b.ur << 16u);
+    var rows = by_u | by_l | by_ul | ur;
     while (rows != 0u) {
-        let r = countTrailingZeros(rows);
+        let bit = countTrailingZeros(rows);
         rows &= rows - 1u;
-        let bit = 1u << r;
-        let i = row0 + r * w + 1u;
+        let k = bit >> 4u;
+        let r = bit & 15u;
+        let one = 1u << bit;
+        let second = k == 1u;
+        let tops_l = select(a.tops_l, b.tops_l, second);
+        let up_tops = select(a.up_tops, b.up_tops, vec3<bool>(second));
+        let r0 = row0 + k;
+        let i = r0 + r * w + 1u;
         // L: the top of L's run, same walk, at or above row r
-        let l_top = row_of_top(tops.x, r);
+        let l_top = row_of_top(tops_l, r);
         // UL, UR: the top of the run holding row r - 1 of column x -+ 1, in
         // this walk or (r = 0) the walk above; U only at row 0 (up_tops.y)
-        let ul_top = select(up_tops.x, row_of_top(tops.x, r - 1u), r > 0u);
-        let ur_top = select(up_tops.z, row_of_top(tops.z, r - 1u), r > 0u);
-        if (((by_u | by_l | by_ul) & bit) != 0u) {
-            let t = select(select(at(row0, w, ul_top, 0u), at(row0, w, l_top, 0u), (by_l & bit) != 0u), at(row0, w, up_tops.y, 1u), (by_u & bit) != 0u);
+        let ul_top = select(up_tops.x, row_of_top(tops_l, r - 1u), r > 0u);
+        let ur_top = select(up_tops.z, row_of_top(select(a.tops_r, b.tops_r, second), r - 1u), r > 0u);
+        if (((by_u | by_l | by_ul) & one) != 0u) {
+            let t = select(select(at(r0, w, ul_top, 0u), at(r0, w, l_top, 0u), (by_l & one) != 0u), at(r0, w, up_tops.y, 1u), (by_u & one) != 0u);
             link(i, t);
         }
-        if ((ur & bit) != 0u) { link(i, at(row0, w, ur_top, 2u)); }
+        if ((ur & one) != 0u) { link(i, at(r0, w, ur_top, 2u)); }
     }
 }
 
