@@ -149,7 +149,7 @@ fn tile_col(x: u32) -> u32 { return (x / TILE) * TILE + x % TILE; }
 // x+1 of the walk's tile and the tile above (for a quad walk's four columns,
 // twelve loads of six columns, unconditional); every row's decision is taken
 // at once in bit operations, and each column's unions are made in a loop
-// over the rows that have any (merge_column). A SIMD software rasteriser runs a
+// over the rows that have any (merge_pair, two columns a loop). A SIMD software rasteriser runs a
 // branch's body for every lane of the group (masked), so the unions in the
 // walk cost 16 times per column; compacted, they cost as many times as the
 // busiest lane of the group has tops to join.
