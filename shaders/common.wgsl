@@ -169,6 +169,18 @@ fn quad_span(wg: vec3<u32>, li: vec3<u32>) -> vec4<u32> {
     return vec4<u32>(x0, o.y, min(o.y + TILE, lh(o.z)), o.z);
 }
 
+// A quad walk as an entry of the walk list (gpu::layout::walk_entry):
+// level, x0 / 4, top row / 16. rules.wgsl appends the walks that hold an
+// active pixel; hysteresis.wgsl runs over them.
+fn walk_entry(l: u32, x0: u32, y0: u32) -> u32 { return l | ((x0 >> 2u) << 5u) | ((y0 / TILE) << 17u); }
+
+// The span of walk entry e, as quad_span: (x0, top row, end row, level).
+fn walk_span(e: u32) -> vec4<u32> {
+    let l = e & 31u;
+    let y0 = (e >> 17u) * TILE;
+    return vec4<u32>(((e >> 5u) & 4095u) * 4u, y0, min(y0 + TILE, lh(l)), l);
+}
+
 // Six neighbouring columns' words, bytes or indices in a quad walk: columns
 // x0 - 1 .. x0 + 2 in `a`, x0 + 3 and x0 + 4 in `b`.
 struct Six {

@@ -15,10 +15,12 @@
 // cleared by the pass's prepare (all 0) says "no parent": every pixel starts
 // as a root, without an init dispatch. Below, "labels[i]" means the parent
 // ~labels[i], with NONE (= ~0) ordered above every index. Three dispatches,
-// each a quad pass over every level (four columns of a tile per invocation,
-// see quad_span: with a few run tops per column, the invocations' own work
-// was a good part of their cost on lavapipe; hysteresis 6.8 -> 5.8 ms per
-// KITTI frame with all three), in this order:
+// each over the walk list (`walks`: the quad walks, four columns of a tile
+// row, that hold an active pixel, about half of a KITTI frame's; rules.wgsl
+// appends them, walk_args writes the args), four columns per invocation (see
+// quad_span: with a few run tops per column, the invocations' own work was a
+// good part of their cost on lavapipe; hysteresis 6.8 -> 5.8 ms per KITTI
+// frame with all three), in this order:
 //   merge        union of each active pixel with its active left, up-left,
 //                up and up-right neighbours (the other four see it as theirs),
 //                as few of them as keep the components, made between the
@@ -60,6 +62,42 @@
 @group(0) @binding(2) var<storage, read_write> labels: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> flags: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> edges: array<u32>;
+// The quad walks holding an active pixel (common.wgsl walk_entry), appended
+// by rules.wgsl and counted in counters[WALKS]; walk_args pads them to a
+// whole workgroup with NO_WALK and writes the steps' indirect args.
+@group(0) @binding(5) var<storage, read_write> walks: array<u32>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> indirect: array<u32>;
+
+// counter::WALKS and indirect::WALKS / 4 in src/gpu/buffers.rs.
+const C_WALKS: u32 = 5u;
+const I_WALKS: u32 = 24u;
+// A walk list entry past the list's end.
+const NO_WALK: u32 = 0xffffffffu;
+
+@compute @workgroup_size(1, 1, 1)
+fn walk_args() {
+    let n = atomicLoad(&counters[C_WALKS]);
+    let a = list_args(n);
+    indirect[I_WALKS] = a.x;
+    indirect[I_WALKS + 1u] = a.y;
+    indirect[I_WALKS + 2u] = a.z;
+    for (var k = n; k < (n + 63u) / 64u * 64u; k++) {
+        walks[k] = NO_WALK;
+    }
+}
+
+// The span (x0, top row, end row, level, as quad_span) of this invocation's
+// walk of the list; no rows (end = top) past the list's end. (A dispatch of
+// more than 65535 workgroups is a rectangle that may pass the padding: an
+// entry there is whatever a frame left, so it must name a walk of this
+// frame's levels, and a walk listed twice only repeats idempotent work.)
+fn listed_walk(wg: vec3<u32>, li: vec3<u32>) -> vec4<u32> {
+    let e = walks[list_index(wg, li)];
+    let c = walk_span(e);
+    if (e == NO_WALK || c.w >= P.n_levels || c.x >= lw(c.w) || c.y >= lh(c.w)) { return vec4<u32>(0u); }
+    return c;
+}
 
 const EDGE: u32 = 255u;
 
@@ -155,7 +193,7 @@ fn tile_col(x: u32) -> u32 { return (x / TILE) * TILE + x % TILE; }
 // busiest lane of the group has tops to join.
 @compute @workgroup_size(64, 1, 1)
 fn merge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let c = quad_span(wg, li);
+    let c = listed_walk(wg, li);
     if (c.y == c.z) { return; }
     let l = c.w;
     let w = lw(l);
@@ -289,11 +327,11 @@ fn run_mask(act: u32, r0: u32) -> u32 {
 // top's root is every pixel's. A loop over the runs' tops: the top's label
 // becomes its root, and the root is marked when any pixel of the run is
 // STRONG. (The other pixels have no label: final_edges reads the tops only.)
-// A quad pass (common.wgsl quad_span): four columns per invocation, their
+// Over the walk list (listed_walk): four columns per invocation, their
 // run tops in two loops of two columns each (compress_pair).
 @compute @workgroup_size(64, 1, 1)
 fn compress(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let c = quad_span(wg, li);
+    let c = listed_walk(wg, li);
     if (c.y == c.z) { return; }
     let l = c.w;
     let w = lw(l);
@@ -356,10 +394,11 @@ fn edge_pair(a: u32, b: u32, i0: u32, w: u32) -> u32 {
 
 // Compacted as compress, per run: the flag of each run top's root (after
 // compress its parent) for the whole run, then the columns' packed words of
-// `edges`. A quad pass (common.wgsl quad_span), as compress (edge_pair).
+// `edges` (the walks not listed stay as the pass's prepare cleared them: 0).
+// Over the walk list, as compress (edge_pair).
 @compute @workgroup_size(64, 1, 1)
 fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let c = quad_span(wg, li);
+    let c = listed_walk(wg, li);
     if (c.y == c.z) { return; }
     let l = c.w;
     let w = lw(l);

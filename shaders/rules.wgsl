@@ -3,13 +3,24 @@
 // pk_word) -> `ruled`, in which only NONE, WEAK and STRONG remain, as bits: one
 // word per column of every tile (common.wgsl tile_word), bit r = row 16 ty + r
 // is active (WEAK or STRONG), bit 16 + r is STRONG (gpu::layout::pack_ruled).
-// Hysteresis reads them so, a word per column walk. A quad pass (four columns per invocation),
+// Hysteresis reads them so, a word per column walk; each quad walk with an
+// active pixel is appended to `walks` (common.wgsl walk_entry), counted in
+// counters[WALKS] (cleared by the pass's prepare). A quad pass (four columns per invocation),
 // all levels in one dispatch (over the tile list). Both rules read the classes
 // of SPEC 6 only, so the result does not depend on the order of invocations.
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/rules.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> classes: array<u32>;
 @group(0) @binding(2) var<storage, read_write> ruled: array<u32>;
+@group(0) @binding(3) var<storage, read_write> walks: array<u32>;
+@group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
+
+// counter::WALKS in src/gpu/buffers.rs.
+const C_WALKS: u32 = 5u;
+
+// The workgroup's listed walks, and where they start in `walks`.
+var<workgroup> wg_walks: atomic<u32>;
+var<workgroup> wg_base: u32;
 
 // Classes of src/cpu/classify.rs.
 const NONE: u32 = 0u;
@@ -80,7 +91,24 @@ fn quad_bits(a: Six, b: Six, c0: Six, c1: Six, c2: Six, c3: Six, k: u32, yy: i32
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = quad_span(wg, li);
-    if (span.y == span.z) { return; }
+    var listed = false;
+    if (span.y != span.z) { listed = rule_walk(span); }
+    // A walk with an active pixel joins the walk list (hysteresis runs over
+    // it; about half the walks of a KITTI frame have none). One list
+    // reservation per workgroup: an atomic per walk on the one counter
+    // (~11k a frame, the cache line bouncing between the cores) made rules
+    // 40% slower on lavapipe.
+    var slot = 0u;
+    if (listed) { slot = atomicAdd(&wg_walks, 1u); }
+    workgroupBarrier();
+    if (li.x == 0u) { wg_base = atomicAdd(&counters[C_WALKS], atomicLoad(&wg_walks)); }
+    workgroupBarrier();
+    if (listed) { walks[wg_base + slot] = walk_entry(span.w, span.x, span.y); }
+}
+
+// The walk `span` (quad_span) of rules: its four words of `ruled`; true when
+// it has an active pixel.
+fn rule_walk(span: vec4<u32>) -> bool {
     let l = span.w;
     let x0 = span.x;
     let w = lw(l);
@@ -100,6 +128,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     if (x0 + 1u < w) { ruled[i + 1u] = bits.y; }
     if (x0 + 2u < w) { ruled[i + 2u] = bits.z; }
     if (x0 + 3u < w) { ruled[i + 3u] = bits.w; }
+    return ((bits.x | bits.y | bits.z | bits.w) & 0xffffu) != 0u;
 }
 
 // The four columns' `ruled` bits of rows y .. y + 3 (none past `end`); rows

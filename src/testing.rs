@@ -61,6 +61,33 @@ pub fn upload_ruled(ctx: &GpuContext, b: &Buffers, l: usize, p: &Plane<u8>) {
     }
 }
 
+/// Writes the walk list of the ruled classes `planes` (one per level,
+/// [`walk_list`](crate::gpu::layout::walk_list)) and its count, as `rules`
+/// leaves them for hysteresis; in reverse raster order, since `rules`
+/// appends in no particular order.
+pub fn upload_walks(ctx: &GpuContext, b: &Buffers, planes: &[Plane<u8>]) {
+    let mut walks: Vec<u32> = planes
+        .iter()
+        .enumerate()
+        .flat_map(|(l, p)| crate::gpu::layout::walk_list(l as u32, p.width, p.height, &p.data))
+        .collect();
+    walks.reverse();
+    if !walks.is_empty() {
+        ctx.queue.write_buffer(&b.walks, 0, bytemuck::cast_slice(&walks));
+    }
+    let count = crate::gpu::buffers::counter::WALKS as u64 * 4;
+    ctx.queue.write_buffer(&b.counters, count, bytemuck::bytes_of(&(walks.len() as u32)));
+}
+
+/// The walk list `rules` appended, sorted.
+pub fn download_walks(ctx: &GpuContext, b: &Buffers) -> Result<Vec<u32>> {
+    let n = download(ctx, &b.counters)?[crate::gpu::buffers::counter::WALKS] as usize;
+    let mut walks = download(ctx, &b.walks)?;
+    walks.truncate(n);
+    walks.sort_unstable();
+    Ok(walks)
+}
+
 /// Level `l` of the `ruled` plane as classes (0, 2, 4), one u32 per pixel, row-major.
 pub fn download_ruled(ctx: &GpuContext, b: &Buffers, l: usize) -> Result<Vec<u32>> {
     let r = b.layout.tile_range(l);

@@ -129,6 +129,7 @@ fn check_hysteresis(ctx: &GpuContext, pass: &HysteresisPass, b: &Buffers, planes
     for (l, p) in planes.iter().enumerate() {
         t::upload_ruled(ctx, b, l, p);
     }
+    t::upload_walks(ctx, b, planes);
     t::run(ctx, pass, b).unwrap();
     for (l, p) in planes.iter().enumerate() {
         let want = to_u32(&hysteresis(p));
@@ -347,9 +348,14 @@ fn rules_match_cpu_on_random_classes() {
             t::upload_packed(&ctx, &b, &b.classes, l, p);
         }
         t::run(&ctx, &pass, &b).unwrap();
+        let mut want_walks = Vec::new();
         for (l, p) in planes.iter().enumerate() {
-            assert_eq!(t::download_ruled(&ctx, &b, l).unwrap(), to_u32(&rules(p)), "{w}x{h} level {l}");
+            let r = rules(p);
+            assert_eq!(t::download_ruled(&ctx, &b, l).unwrap(), to_u32(&r), "{w}x{h} level {l}");
+            want_walks.extend(lfast::gpu::layout::walk_list(l as u32, r.width, r.height, &r.data));
         }
+        want_walks.sort_unstable();
+        assert_eq!(t::download_walks(&ctx, &b).unwrap(), want_walks, "{w}x{h} walk list");
     }
 }
 

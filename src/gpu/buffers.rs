@@ -67,8 +67,11 @@ pub mod indirect {
     /// `dispatch_workgroups_indirect` over the L-FAST edge list (64 per
     /// group), as [`CANDS`] (the L-FAST test; written by the lfast pass).
     pub const EDGES: u64 = 80;
+    /// `dispatch_workgroups_indirect` over the walk list (64 per group), as
+    /// [`CANDS`] (hysteresis; written by its `walk_args`).
+    pub const WALKS: u64 = 96;
     /// Size of the buffer.
-    pub const SIZE: u64 = 96;
+    pub const SIZE: u64 = 112;
 }
 
 /// Slots of [`Buffers::counters`].
@@ -83,6 +86,8 @@ pub mod counter {
     pub const CANDS: usize = 3;
     /// Entries of the L-FAST edge list (`edge_list`).
     pub const EDGES: usize = 4;
+    /// Entries of the walk list (`walks`, appended by rules).
+    pub const WALKS: usize = 5;
     /// Words in the buffer.
     pub const LEN: usize = 8;
 }
@@ -201,6 +206,11 @@ pub struct Buffers {
     /// one word per column of every tile, bit r active and bit 16 + r STRONG
     /// for row 16 ty + r ([`pack_ruled`](super::layout::pack_ruled)).
     pub ruled: wgpu::Buffer,
+    /// The quad walks holding an active pixel, appended by rules in no
+    /// particular order ([`walk_entry`](super::layout::walk_entry)), counted in
+    /// `counters[WALKS]`: hysteresis runs over them only (its `walk_args`
+    /// pads the list to a whole workgroup: 4 entries per tile and 64 more).
+    pub walks: wgpu::Buffer,
     /// Union-find labels (hysteresis).
     pub labels: wgpu::Buffer,
     /// Per root, one bit (bit i % 32 of word i / 32 for atlas index i): set
@@ -347,6 +357,8 @@ impl Buffers {
         indirect_init[14] = 1;
         indirect_init[18] = 1;
         indirect_init[22] = 1;
+        indirect_init[25] = 1;
+        indirect_init[26] = 1;
         let this = Self {
             params: init(
                 "params",
@@ -368,6 +380,7 @@ impl Buffers {
             window_hist: buf("window_hist", window_hist_bytes),
             classes: buf("classes", allocated.packed * 4),
             ruled: buf("ruled", allocated.tiles * TILE as u64 * 4),
+            walks: buf("walks", (allocated.tiles * 4 + 64) * 4),
             labels: px("labels"),
             flags: buf("flags", (layout.total_px as u64).div_ceil(32) * 4),
             edges: buf("edges", allocated.packed * 4),

@@ -5,24 +5,34 @@
 //! and flags: exact after a fixed number of dispatches, with no read-back and
 //! no iteration cap (the shader argues why).
 
-use super::buffers::Buffers;
+use super::buffers::{Buffers, indirect};
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
 use super::pass::Pass;
 use crate::error::Result;
 
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/hysteresis.wgsl");
-/// Its bindings (shared by every entry point).
+/// Its bindings (every entry point's).
 pub const BINDINGS: &[Binding] = &[
     PARAMS,
     b(1, "ruled", Slot::Read),
     b(2, "labels", Slot::ReadWrite),
     b(3, "flags", Slot::ReadWrite),
     b(4, "edges", Slot::ReadWrite),
+    b(5, "walks", Slot::ReadWrite),
+    b(6, "counters", Slot::ReadWrite),
+    b(7, "indirect", Slot::ReadWrite),
 ];
+/// `walk_args`'s: it writes the args the three steps are dispatched by, so
+/// those must not bind `indirect` (a buffer is either indirect args or
+/// storage within one dispatch).
+const ARGS_BINDINGS: &[Binding] = &[PARAMS, BINDINGS[5], BINDINGS[6], BINDINGS[7]];
+/// The three steps'.
+const STEP_BINDINGS: &[Binding] = BINDINGS.split_at(6).0;
 
-/// The entry points in dispatch order.
-pub const ENTRIES: [&str; 3] = ["merge", "compress", "final_edges"];
+/// The entry points in dispatch order: the walk list's dispatch args, then
+/// the three steps over the list.
+pub const ENTRIES: [&str; 4] = ["walk_args", "merge", "compress", "final_edges"];
 
 /// The hysteresis pass.
 #[derive(Debug)]
@@ -45,24 +55,46 @@ impl Pass for HysteresisPass {
         let module = super::kernel::compile(device, Self::NAME, SOURCE);
         let kernels = ENTRIES
             .iter()
-            .map(|e| Kernel::from_module(device, &format!("{}::{e}", Self::NAME), &module, e, BINDINGS))
+            .map(|e| {
+                let bindings = if *e == "walk_args" { ARGS_BINDINGS } else { STEP_BINDINGS };
+                Kernel::from_module(device, &format!("{}::{e}", Self::NAME), &module, e, bindings)
+            })
             .collect();
         Self { kernels }
     }
 
     fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<HysteresisBound> {
-        let buffers =
-            [("P", &b.params), ("ruled", &b.ruled), ("labels", &b.labels), ("flags", &b.flags), ("edges", &b.edges)];
-        let groups = self.kernels.iter().map(|k| k.bind(device, &buffers)).collect::<Result<Vec<_>>>()?;
+        let buffers = [
+            ("P", &b.params),
+            ("ruled", &b.ruled),
+            ("labels", &b.labels),
+            ("flags", &b.flags),
+            ("edges", &b.edges),
+            ("walks", &b.walks),
+            ("counters", &b.counters),
+            ("indirect", &b.indirect),
+        ];
+        // each kernel takes the buffers its own bindings name
+        let groups = self
+            .kernels
+            .iter()
+            .map(|k| {
+                let mine: Vec<_> =
+                    buffers.iter().copied().filter(|(n, _)| k.bindings().iter().any(|bd| bd.name == *n)).collect();
+                k.bind(device, &mine)
+            })
+            .collect::<Result<Vec<_>>>()?;
         Ok(HysteresisBound { groups })
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &HysteresisBound, b: &Buffers) {
         // wgpu orders the dispatches of one compute pass (each sees the
         // storage writes of the previous one).
-        // quad passes: four columns per invocation
-        for (k, g) in self.kernels.iter().zip(&bound.groups) {
-            k.dispatch(pass, g, b.layout.quad_groups());
+        // the args over the walk list (rules appended it), then the three
+        // steps, four columns of a listed walk per invocation
+        self.kernels[0].dispatch(pass, &bound.groups[0], [1, 1, 1]);
+        for (k, g) in self.kernels.iter().zip(&bound.groups).skip(1) {
+            k.dispatch_indirect(pass, g, &b.indirect, indirect::WALKS);
         }
     }
 
@@ -71,5 +103,7 @@ impl Pass for HysteresisPass {
         // complemented). `compress` only ever sets roots' bits of flags.
         encoder.clear_buffer(&b.labels, 0, None);
         encoder.clear_buffer(&b.flags, 0, None);
+        // final_edges writes the listed walks only: the others stay 0
+        encoder.clear_buffer(&b.edges, 0, None);
     }
 }

@@ -358,6 +358,44 @@ pub fn pack_ruled(w: u32, h: u32, v: &[u8]) -> Vec<u32> {
     words
 }
 
+/// A quad walk (four columns x0 .. x0 + 3 from row y0 = 16 ty, up to 16 rows)
+/// of level `l` as an entry of the walk list: `l | (x0 / 4) << 5 | (y0 / 16)
+/// << 17` (common.wgsl `walk_entry`; sides are at most 16384, levels 32).
+/// `rules` appends the walks that hold an active pixel and hysteresis runs
+/// over them only.
+///
+/// ```
+/// use lfast::gpu::layout::walk_entry;
+/// assert_eq!(walk_entry(2, 8, 32), 2 | (2 << 5) | (2 << 17));
+/// ```
+pub fn walk_entry(l: u32, x0: u32, y0: u32) -> u32 {
+    l | ((x0 / 4) << 5) | ((y0 / TILE) << 17)
+}
+
+/// The walk list of level `l`'s ruled classes (0 = NONE, row-major, `w * h`),
+/// in raster order of the walks: every quad walk with an active pixel, as
+/// `rules` appends them (in no particular order).
+///
+/// ```
+/// use lfast::gpu::layout::{walk_entry, walk_list};
+/// // 9 x 20: WEAK at (5, 17), the walk of columns 4..8 in tile row 1
+/// let mut v = vec![0u8; 9 * 20];
+/// v[17 * 9 + 5] = 2;
+/// assert_eq!(walk_list(1, 9, 20, &v), vec![walk_entry(1, 4, 16)]);
+/// ```
+pub fn walk_list(l: u32, w: u32, h: u32, v: &[u8]) -> Vec<u32> {
+    let mut out = Vec::new();
+    for y0 in (0..h).step_by(TILE as usize) {
+        for x0 in (0..w).step_by(4) {
+            let active = (y0..(y0 + TILE).min(h)).any(|y| (x0..(x0 + 4).min(w)).any(|x| v[(y * w + x) as usize] != 0));
+            if active {
+                out.push(walk_entry(l, x0, y0));
+            }
+        }
+    }
+    out
+}
+
 /// The inverse of [`pack_ruled`]: `w * h` classes (0, 2 or 4) in row-major order.
 pub fn unpack_ruled(w: u32, h: u32, words: &[u32]) -> Vec<u8> {
     let tx = w.div_ceil(TILE);
