@@ -31,22 +31,6 @@
 
 // Zero at the start of a workgroup (WGSL zero-initialises workgroup memory).
 var<workgroup> bins: array<atomic<u32>, 256>;
-// The windows holding the cell: columns [win.x, win.y), rows [win.z, win.w).
-var<workgroup> win: vec4<u32>;
-
-// The windows of origins grid[o..o+n] (size `size`) that hold [c0, c1):
-// origins are sorted and sizes equal, so they are one range.
-fn holding(o: u32, n: u32, size: u32, c0: u32, c1: u32) -> vec2<u32> {
-    var r = vec2<u32>(n, n);
-    for (var k = 0u; k < n; k++) {
-        let s = grid[o + k];
-        if (s <= c0 && c1 <= s + size) {
-            r.y = k + 1u;
-            if (r.x == n) { r.x = k; }
-        }
-    }
-    return r;
-}
 
 // Bit-sliced counters of the values below 32: bit v of plane k is bit k of
 // value v's count, planes 0..3 in `lo`, 4..7 in `hi` (counts < 256). A
@@ -126,19 +110,20 @@ fn cells(
     if (l >= P.n_levels) { return; }
     let hdr = P.cells + 4u * l;
     let cxo = grid[hdr];
+    let ncx = grid[hdr + 1u];
     let cyo = grid[hdr + 2u];
+    let ncy = grid[hdr + 3u];
     // Workgroup-uniform: the barrier below is reached by all or none.
-    if (wg.x >= grid[hdr + 1u] || wg.y >= grid[hdr + 3u]) { return; }
+    if (wg.x >= ncx || wg.y >= ncy) { return; }
     let x0 = grid[cxo + wg.x];
     let x1 = grid[cxo + wg.x + 1u];
     let y0 = grid[cyo + wg.y];
     let y1 = grid[cyo + wg.y + 1u];
     let g = P.grids[l];
-    if (li == 0u) {
-        let wx = holding(g.z, g.x, g.w & 0xffffu, x0, x1);
-        let wy = holding(g.z + g.x, g.y, g.w >> 16u, y0, y1);
-        win = vec4<u32>(wx, wy);
-    }
+    // the windows holding the cell (gpu::layout::holding, after each axis's
+    // cuts): looked up, where a search over the origins cost ~0.3 ms per frame
+    let wx = grid[cxo + ncx + 1u + wg.x];
+    let wy = grid[cyo + ncy + 1u + wg.y];
     // Columns li, li + 8, ... of the cell, each down its rows a word (four
     // rows, `m` is column-packed) at a time. Values below 32 (~96% of the
     // pixels of a KITTI frame) are counted in registers, bit-sliced
@@ -178,7 +163,7 @@ fn cells(
     }
     flush_slices(&sl);
     workgroupBarrier();
-    let r = win;
+    let r = vec4<u32>(wx & 0xffffu, wx >> 16u, wy & 0xffffu, wy >> 16u);
     // bins li, li + 8, ...: the non-empty ones as bits, added in a `while`
     // loop (most of a small or flat cell's bins are empty)
     // (256 / CELL_INVOCATIONS = 32 bits). Loops bounded by `li` here and in

@@ -126,10 +126,11 @@ impl Allocated {
             packed: layout.total_packed as u64,
             keypoints: layout.capacity as u64,
             windows: levels * per_level,
-            // xs, ys, then per level a cell header and at most 2 cuts per window and 2 more per axis
+            // xs, ys, then per level a cell header, at most 2 cuts per window
+            // and 2 more per axis, and a window range per cell
             grid: sides
                 + levels * 2 * MAX_WINDOWS_PER_AXIS as u64
-                + levels * (4 + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 2)),
+                + levels * (4 + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 2) + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 1)),
             input: (w as u64 * h as u64).next_multiple_of(4),
             levels: layout.n_levels() as u64,
             tiles: layout.params.total_tiles as u64,

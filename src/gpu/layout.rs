@@ -105,7 +105,8 @@ pub struct FrameLayout {
     /// a window index is below [`MAX_WINDOWS_PER_AXIS`]); then, from
     /// `params.cells`, per level the header `[offset of cx, cells along x,
     /// offset of cy, cells along y]` and after the headers each level's cell
-    /// cuts `cx`, `cy` ([`cell_cuts`]).
+    /// cuts `cx`, `cy` ([`cell_cuts`]), each followed by its cells' window
+    /// ranges ([`holding`]).
     pub grid_data: Vec<u32>,
     /// Most cells of any level along x and y.
     pub max_cells: (u32, u32),
@@ -163,7 +164,9 @@ impl FrameLayout {
         }
         let capacity = capacity.clamp(1, u32::MAX as u64 / 64) as u32;
         // The cells: per level a header (offset of the x cuts, cells along x,
-        // offset of the y cuts, cells along y), then each level's cuts.
+        // offset of the y cuts, cells along y), then each level's cuts, each
+        // axis's followed by the range of windows holding each of its cells
+        // (`holding`).
         p.cells = grid_data.len() as u32;
         let cells_data = 4 * grids.len();
         grid_data.resize(grid_data.len() + cells_data, 0);
@@ -176,9 +179,11 @@ impl FrameLayout {
             grid_data[hdr] = grid_data.len() as u32;
             grid_data[hdr + 1] = ncx;
             grid_data.extend_from_slice(&cx);
+            grid_data.extend(cx.windows(2).map(|c| holding(&g.xs, g.a, c[0], c[1])));
             grid_data[hdr + 2] = grid_data.len() as u32;
             grid_data[hdr + 3] = ncy;
             grid_data.extend_from_slice(&cy);
+            grid_data.extend(cy.windows(2).map(|c| holding(&g.ys, g.b, c[0], c[1])));
         }
         for (l, q) in level_quotas(cfg.n_features, &sizes).into_iter().enumerate() {
             p.quotas[l / 4][l % 4] = q;
@@ -294,6 +299,27 @@ impl FrameLayout {
         let (w, h) = self.sizes[l];
         let o = self.packed_offsets[l] as usize;
         o..o + (w * h.div_ceil(4)) as usize
+    }
+}
+
+/// The windows of origins `origins` (sorted, all of size `size`) that hold
+/// the cell `[c0, c1)`, as `first | end << 16` (one range; `first == end ==
+/// origins.len()` when none does): the windows local_threshold's `cells` adds
+/// the cell's bins to.
+///
+/// ```
+/// use lfast::gpu::layout::holding;
+/// // KITTI width 1241: windows of 248 at 0, 124, ..., 992, 993
+/// let xs = lfast::spec::window_origins(1241, 248);
+/// assert_eq!(holding(&xs, 248, 124, 248), 0 | (2 << 16)); // windows 0 and 1
+/// assert_eq!(holding(&xs, 248, 992, 993), 7 | (9 << 16)); // 7 and 8, not the flush window 9
+/// ```
+pub fn holding(origins: &[u32], size: u32, c0: u32, c1: u32) -> u32 {
+    let n = origins.len() as u32;
+    let held: Vec<u32> = (0..n).filter(|&k| origins[k as usize] <= c0 && c1 <= origins[k as usize] + size).collect();
+    match (held.first(), held.last()) {
+        (Some(&first), Some(&last)) => first | ((last + 1) << 16),
+        _ => n | (n << 16),
     }
 }
 
