@@ -1,11 +1,12 @@
 // SPEC 11: keypoint orientation by the intensity centroid, and its bin.
 // Mirrors src/cpu/orientation.rs (`moments`, `AngleBins::bin_of`, `angle_deg`).
-// One workgroup of 8 invocations per final keypoint, dispatched indirectly
-// (indirect::KEYPOINT_GROUPS: keypoint = wg.y * 65535 + wg.x); the invocations
-// share the disc's 62 half columns (moments_part) and add their integer sums
-// in workgroup atomics (exact, so the order does not matter). 64 invocations,
-// one half column each, took 2.3 ms per KITTI frame on lavapipe (every SIMD
-// group of 8 of a workgroup with a barrier is a coroutine there); 8 took 1.5. The moments are exact integers on
+// One invocation per final keypoint, dispatched indirectly over them
+// (indirect::KEYPOINTS, 64 a workgroup), summing the disc's 62 half columns
+// (moments_part) alone. A workgroup per keypoint sharing the half columns
+// and adding them in workgroup atomics took 2.3 ms per KITTI frame on
+// lavapipe with 64 invocations, 1.5 with 8 (every SIMD group of 8 of a
+// workgroup with a barrier is a coroutine there, and each of ~1500
+// workgroups paid its own work). The moments are exact integers on
 // the *unsmoothed* level; the angle is an f32 approximation (the host
 // recomputes it exactly from m10, m01).
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/orientation.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -122,41 +123,25 @@ fn angle_deg(m: vec2<i32>) -> f32 {
     return a;
 }
 
-var<workgroup> sum10: atomic<i32>;
-var<workgroup> sum01: atomic<i32>;
-
-@compute @workgroup_size(8, 1, 1)
-fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
-    let i = wg.y * 65535u + wg.x;
-    // No early return before the barriers (they need uniform control flow):
-    // `ok` guards the work instead.
+// One invocation per keypoint, 64 a workgroup (indirect::KEYPOINTS), no
+// workgroup memory and no barrier: the invocation sums the disc's 62 half
+// columns itself, in a loop bounded by the level (a constant trip count is
+// unrolled by lavapipe's compiler).
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let i = list_index(wg, li);
+    if (i >= counters[KEYPOINTS] || i >= P.capacity) { return; }
     // Every lane reads the three fields it needs, not the whole record (a
-    // SIMD software rasteriser reads each field lane by lane); index clamped,
-    // so the reads are unconditional.
-    let live = i < counters[KEYPOINTS] && i < P.capacity;
-    let ki = select(0u, i, live);
-    let level = keypoints[ki].level;
-    let kx = keypoints[ki].px;
-    let ky = keypoints[ki].py;
-    let ok = live && level < P.n_levels;
-    if (lane == 0u) {
-        atomicStore(&sum10, 0);
-        atomicStore(&sum01, 0);
+    // SIMD software rasteriser reads each field lane by lane).
+    let level = keypoints[i].level;
+    let kx = i32(keypoints[i].px);
+    let ky = i32(keypoints[i].py);
+    if (level >= P.n_levels) { return; }
+    var m = vec2<i32>(0);
+    for (var k = level * 0u; k < 62u + level * 0u; k++) {
+        m += moments_part(level, kx, ky, k);
     }
-    workgroupBarrier();
-    if (ok) {
-        // half columns lane, lane + 8, ... (< 62)
-        var part = vec2<i32>(0);
-        for (var k = lane; k < 62u; k += 8u) {
-            part += moments_part(level, i32(kx), i32(ky), k);
-        }
-        atomicAdd(&sum10, part.x);
-        atomicAdd(&sum01, part.y);
-    }
-    workgroupBarrier();
-    if (!ok || lane != 0u) { return; }
     var kp = keypoints[i];
-    let m = vec2(atomicLoad(&sum10), atomicLoad(&sum01));
     kp.m10 = m.x;
     kp.m01 = m.y;
     kp.bin = bin_of(m);

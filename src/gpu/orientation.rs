@@ -26,5 +26,5 @@ simple_pass! {
         "counters" = counters,
         "angle_bounds" = angle_bounds,
     }
-    dispatch |b| Groups::Indirect(indirect::KEYPOINT_GROUPS)
+    dispatch |b| Groups::Indirect(indirect::KEYPOINTS)
 }
