@@ -90,9 +90,12 @@ fn quad_bits(a: Six, b: Six, c0: Six, c1: Six, c2: Six, c3: Six, k: u32, yy: i32
 // of `ruled` are written once at the end, none past the level's right edge.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    // A lane without a walk (quad_span's empty span: level 0, no rows) runs
+    // the walk's code with nothing to do, no `if` around it: the barriers
+    // below need every lane, and the walk inside an `if` took lavapipe's
+    // compiler ~2 ms longer.
     let span = quad_span(wg, li);
-    var listed = false;
-    if (span.y != span.z) { listed = rule_walk(span); }
+    let listed = rule_walk(span, span.y != span.z);
     // A walk with an active pixel joins the walk list (hysteresis runs over
     // it; about half the walks of a KITTI frame have none). One list
     // reservation per workgroup: an atomic per walk on the one counter
@@ -106,9 +109,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     if (listed) { walks[wg_base + slot] = walk_entry(span.w, span.x, span.y); }
 }
 
-// The walk `span` (quad_span) of rules: its four words of `ruled`; true when
-// it has an active pixel.
-fn rule_walk(span: vec4<u32>) -> bool {
+// The walk `span` (quad_span) of rules: its four words of `ruled` (when
+// `real`); true when it is real and has an active pixel.
+fn rule_walk(span: vec4<u32>, real: bool) -> bool {
     let l = span.w;
     let x0 = span.x;
     let w = lw(l);
@@ -124,11 +127,11 @@ fn rule_walk(span: vec4<u32>) -> bool {
         bits |= step(&a, &b, &cur, l, cols, inside, y, y0, end);
     }
     let i = tile_word(l, x0, span.y / TILE);
-    ruled[i] = bits.x;
-    if (x0 + 1u < w) { ruled[i + 1u] = bits.y; }
-    if (x0 + 2u < w) { ruled[i + 2u] = bits.z; }
-    if (x0 + 3u < w) { ruled[i + 3u] = bits.w; }
-    return ((bits.x | bits.y | bits.z | bits.w) & 0xffffu) != 0u;
+    if (real) { ruled[i] = bits.x; }
+    if (real && x0 + 1u < w) { ruled[i + 1u] = bits.y; }
+    if (real && x0 + 2u < w) { ruled[i + 2u] = bits.z; }
+    if (real && x0 + 3u < w) { ruled[i + 3u] = bits.w; }
+    return real && ((bits.x | bits.y | bits.z | bits.w) & 0xffffu) != 0u;
 }
 
 // The four columns' `ruled` bits of rows y .. y + 3 (none past `end`); rows
