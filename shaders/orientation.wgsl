@@ -125,8 +125,8 @@ fn angle_deg(m: vec2<i32>) -> f32 {
 
 // One invocation per keypoint, 64 a workgroup (indirect::KEYPOINTS), no
 // workgroup memory and no barrier: the invocation sums the disc's 62 half
-// columns itself, in a loop bounded by the level (a constant trip count is
-// unrolled by lavapipe's compiler).
+// columns itself, in a loop bounded by a value read at run time (a constant
+// trip count is unrolled by lavapipe's compiler).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let i = list_index(wg, li);
@@ -138,7 +138,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let ky = i32(keypoints[i].py);
     if (level >= P.n_levels) { return; }
     var m = vec2<i32>(0);
-    for (var k = level * 0u; k < 62u + level * 0u; k++) {
+    // n_levels <= 32: a bound the compiler cannot see
+    let halves = 62u + (P.n_levels >> 6u);
+    for (var k = 0u; k < halves; k++) {
         m += moments_part(level, kx, ky, k);
     }
     var kp = keypoints[i];
