@@ -32,13 +32,15 @@ pub enum Groups {
 /// A stage with one kernel (entry point `main`, the module's `SOURCE` and
 /// `BINDINGS`) whose bindings are [`Buffers`] fields named in the macro:
 /// `"wgsl_name" = field`. `dispatch |b| expr` gives its [`Groups`]; `clear
-/// a, b` zeroes those buffers before the pass (atomic accumulators).
+/// a, b` zeroes those buffers before the pass (atomic accumulators), or
+/// `prepare |encoder, b| { ... }` records other commands there.
 macro_rules! simple_pass {
     (
         $(#[$meta:meta])*
         $name:ident = $stage:literal { $($var:literal = $field:ident),* $(,)? }
         dispatch |$b:ident| $groups:expr
         $(; clear $($clear:ident),+)?
+        $(; prepare |$pe:ident, $pb:ident| $prep:block)?
     ) => {
         $(#[$meta])*
         #[derive(Debug)]
@@ -69,6 +71,10 @@ macro_rules! simple_pass {
                 fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &$crate::gpu::buffers::Buffers) {
                     $(encoder.clear_buffer(&b.$clear, 0, None);)+
                 }
+            )?
+
+            $(
+                fn prepare(&self, $pe: &mut wgpu::CommandEncoder, $pb: &$crate::gpu::buffers::Buffers) $prep
             )?
         }
     };
