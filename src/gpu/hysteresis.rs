@@ -74,16 +74,7 @@ impl Pass for HysteresisPass {
             ("counters", &b.counters),
             ("indirect", &b.indirect),
         ];
-        // each kernel takes the buffers its own bindings name
-        let groups = self
-            .kernels
-            .iter()
-            .map(|k| {
-                let mine: Vec<_> =
-                    buffers.iter().copied().filter(|(n, _)| k.bindings().iter().any(|bd| bd.name == *n)).collect();
-                k.bind(device, &mine)
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let groups = self.kernels.iter().map(|k| k.bind_from(device, &buffers)).collect::<Result<Vec<_>>>()?;
         Ok(HysteresisBound { groups })
     }
 

@@ -149,6 +149,15 @@ impl Kernel {
         self.bind_with(device, buffers, &[])
     }
 
+    /// [`bind`](Self::bind) from a list that may name more buffers than this
+    /// kernel binds (the buffers of every entry point of a module): those its
+    /// bindings name, the others ignored.
+    pub fn bind_from(&self, device: &wgpu::Device, buffers: &[(&str, &wgpu::Buffer)]) -> Result<wgpu::BindGroup> {
+        let mine: Vec<_> =
+            buffers.iter().copied().filter(|(n, _)| self.bindings.iter().any(|bd| bd.name == *n)).collect();
+        self.bind(device, &mine)
+    }
+
     /// [`bind`](Self::bind) with textures too, also by name.
     pub fn bind_with(
         &self,

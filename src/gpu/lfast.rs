@@ -80,7 +80,7 @@ impl Pass for LfastPass {
             ("indirect", &b.indirect),
         ];
         // `windows`, `args` and `cand_args` have the same layout entries: one group serves all three.
-        Ok(LfastBound { lists: self.windows.bind(device, &buffers)?, test: self.test.bind(device, &buffers[..8])? })
+        Ok(LfastBound { lists: self.windows.bind(device, &buffers)?, test: self.test.bind_from(device, &buffers)? })
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &LfastBound, b: &Buffers) {
