@@ -98,6 +98,15 @@ fn flush_slices(s: ptr<function, Slices>) {
     (*s).hi = vec4<u32>(0u);
 }
 
+// Rows a..b of word g (rows 4g .. 4g + 3) inside the cell's rows [y0, y1),
+// a contiguous range, as bits; none for a word below the cell.
+fn word_rows(g: u32, y0: u32, y1: u32) -> u32 {
+    if (g * 4u >= y1) { return 0u; }
+    let a = max(g * 4u, y0) - g * 4u;
+    let b = min(g * 4u + 4u, y1) - 1u - g * 4u;
+    return (0xfu >> (3u - b)) & ~((1u << a) - 1u);
+}
+
 // Invocations of a `cells` workgroup (its columns' stride, its bins' stride).
 const CELL_INVOCATIONS: u32 = 8u;
 
@@ -138,26 +147,33 @@ fn cells(
     // an `if` empties them in time: a `while` costs its loop masks every word)
     var pending = 0u;
     for (var x = x0 + li; x < x1; x += CELL_INVOCATIONS) {
-        for (var g4 = y0 >> 2u; g4 * 4u < y1; g4++) {
-            if (pending > 251u) {
+        // two words (eight rows) a step: the loop's own work (its test, the
+        // flush check, the `while` over values >= 32) once per two, 6.08 ->
+        // 5.58 ms per KITTI frame on lavapipe
+        for (var g4 = y0 >> 2u; g4 * 4u < y1; g4 += 2u) {
+            if (pending > 247u) {
                 flush_slices(&sl);
                 pending = 0u;
             }
-            // rows a..b (of the word's four) inside the cell, a contiguous range
-            let a = max(g4 * 4u, y0) - g4 * 4u;
-            let b = min(g4 * 4u + 4u, y1) - 1u - g4 * 4u;
-            let inside = (0xfu >> (3u - b)) & ~((1u << a) - 1u);
-            let word = m[pk_word(l, x, g4 * 4u)];
-            let v = pk_rows(word);
-            let small = v < vec4<u32>(32u);
-            let rows = (vec4<u32>(inside) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
-            count_word(&sl, select(vec4<u32>(0u), vec4<u32>(1u) << v, rows & small));
-            pending += 4u;
-            var big = inside & ~bits4(small);
+            let in0 = word_rows(g4, y0, y1);
+            let in1 = word_rows(g4 + 1u, y0, y1);
+            let last = pk_word(l, x, y1 - 1u);
+            let word0 = m[pk_word(l, x, g4 * 4u)];
+            let word1 = m[min(pk_word(l, x, g4 * 4u + 4u), last)];
+            let v0 = pk_rows(word0);
+            let v1 = pk_rows(word1);
+            let small0 = v0 < vec4<u32>(32u);
+            let small1 = v1 < vec4<u32>(32u);
+            let r0 = (vec4<u32>(in0) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
+            let r1 = (vec4<u32>(in1) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
+            count_word(&sl, select(vec4<u32>(0u), vec4<u32>(1u) << v0, r0 & small0));
+            count_word(&sl, select(vec4<u32>(0u), vec4<u32>(1u) << v1, r1 & small1));
+            pending += 8u;
+            var big = (in0 & ~bits4(small0)) | ((in1 & ~bits4(small1)) << 4u);
             while (big != 0u) {
                 let e = firstTrailingBit(big);
                 big &= big - 1u;
-                atomicAdd(&bins[pk_byte(word, e)], 1u);
+                atomicAdd(&bins[pk_byte(select(word0, word1, e >= 4u), e & 3u)], 1u);
             }
         }
     }
