@@ -30,9 +30,14 @@ const ARGS_BINDINGS: &[Binding] = &[PARAMS, BINDINGS[5], BINDINGS[6], BINDINGS[7
 /// The three steps'.
 const STEP_BINDINGS: &[Binding] = BINDINGS.split_at(6).0;
 
-/// The entry points in dispatch order: the walk list's dispatch args, then
-/// the three steps over the list.
-pub const ENTRIES: [&str; 4] = ["walk_args", "merge", "compress", "final_edges"];
+/// The entry points in dispatch order, with their bindings: the walk list's
+/// dispatch args, then the three steps over the list.
+pub const ENTRIES: [(&str, &[Binding]); 4] = [
+    ("walk_args", ARGS_BINDINGS),
+    ("merge", STEP_BINDINGS),
+    ("compress", STEP_BINDINGS),
+    ("final_edges", STEP_BINDINGS),
+];
 
 /// The hysteresis pass.
 #[derive(Debug)]
@@ -55,10 +60,7 @@ impl Pass for HysteresisPass {
         let module = super::kernel::compile(device, Self::NAME, SOURCE);
         let kernels = ENTRIES
             .iter()
-            .map(|e| {
-                let bindings = if *e == "walk_args" { ARGS_BINDINGS } else { STEP_BINDINGS };
-                Kernel::from_module(device, &format!("{}::{e}", Self::NAME), &module, e, bindings)
-            })
+            .map(|(e, bindings)| Kernel::from_module(device, &format!("{}::{e}", Self::NAME), &module, e, bindings))
             .collect();
         Self { kernels }
     }

@@ -316,9 +316,9 @@ impl FrameLayout {
 /// ```
 pub fn holding(origins: &[u32], size: u32, c0: u32, c1: u32) -> u32 {
     let n = origins.len() as u32;
-    let held: Vec<u32> = (0..n).filter(|&k| origins[k as usize] <= c0 && c1 <= origins[k as usize] + size).collect();
-    match (held.first(), held.last()) {
-        (Some(&first), Some(&last)) => first | ((last + 1) << 16),
+    let holds = |&o: &u32| o <= c0 && c1 <= o + size;
+    match (origins.iter().position(holds), origins.iter().rposition(holds)) {
+        (Some(first), Some(last)) => first as u32 | ((last as u32 + 1) << 16),
         _ => n | (n << 16),
     }
 }
