@@ -14,9 +14,9 @@ Inputs, relative to the crate root:
     message when ../shared is absent.
 
 Gray conversion is the crate's (SPEC 0): 16-bit -> v >> 8, colour ->
-Y = (4899 R + 9617 G + 1868 B + 8192) >> 14 (= cv2.cvtColor RGB2GRAY), alpha
-ignored; the formula is applied here, not cv2.cvtColor, which differs on a few
-pixels in some OpenCV builds. Requires: pip install opencv-python-headless numpy.
+Y = (19596 R + 38470 G + 7470 B + 32768) >> 16 (= cv2.cvtColor BGR2GRAY in
+OpenCV 4.x and 5.x), alpha ignored; the formula is applied here and checked
+against cv2.cvtColor. Requires: pip install opencv-python-headless numpy.
 
 Usage: python3 scripts/opencv_fast_golden.py [--check]
   --check: compare with the files already there instead of writing them.
@@ -51,12 +51,10 @@ def load_gray(path: Path) -> np.ndarray:
         return img
     # cv2.imread gives BGR(A).
     b, g, r = (img[:, :, c].astype(np.uint32) for c in range(3))
-    gray = ((4899 * r + 9617 * g + 1868 * b + 8192) >> 14).astype(np.uint8)
-    # Some OpenCV builds (5.0.0 seen) round cvtColor differently on a few pixels;
-    # the crate's formula is the reference here, so only report it.
+    gray = ((19596 * r + 38470 * g + 7470 * b + 32768) >> 16).astype(np.uint8)
     cv_gray = cv2.cvtColor(np.ascontiguousarray(img[:, :, :3]), cv2.COLOR_BGR2GRAY)
     if not np.array_equal(gray, cv_gray):
-        print(f"note: {path.name}: cv2.cvtColor differs from the SPEC 0 luma on {(gray != cv_gray).sum()} pixels")
+        raise SystemExit(f"{path.name}: cv2.cvtColor differs from the SPEC 0 luma on {(gray != cv_gray).sum()} pixels")
     return gray
 
 

@@ -22,9 +22,10 @@
 @group(0) @binding(3) var tex: texture_2d<f32>;
 @group(0) @binding(4) var<uniform> tex_kind: vec4<u32>;
 
-// Y = (4899 R + 9617 G + 1868 B + 8192) >> 14, as lfast::image::luma_bt601.
+// Y = (19596 R + 38470 G + 7470 B + 32768) >> 16, as lfast::image::luma_bt601
+// (OpenCV 4.x/5.x cvtColor BGR2GRAY; at most 65536 * 255 + 32768 < 2^32).
 fn luma_bt601(r: u32, g: u32, b: u32) -> u32 {
-    return (4899u * r + 9617u * g + 1868u * b + 8192u) >> 14u;
+    return (19596u * r + 38470u * g + 7470u * b + 32768u) >> 16u;
 }
 
 fn unorm_byte(v: f32) -> u32 { return u32(round(clamp(v, 0.0, 1.0) * 255.0)); }

@@ -198,15 +198,18 @@ pub fn check_size(width: u32, height: u32) -> Result<()> {
     Ok(())
 }
 
-/// OpenCV's integer BT.601 luma (SPEC 0).
+/// OpenCV's integer BT.601 luma (SPEC 0): `(19596 R + 38470 G + 7470 B + 32768) >> 16`,
+/// what OpenCV 4.x and 5.x `cvtColor(COLOR_BGR2GRAY)` computes for 8-bit input, so that
+/// converting to gray with cv2 first gives the same keypoints as passing colour.
 ///
 /// ```
 /// assert_eq!(lfast::image::luma_bt601(255, 255, 255), 255);
 /// assert_eq!(lfast::image::luma_bt601(255, 0, 0), 76);
+/// assert_eq!(lfast::image::luma_bt601(0, 0, 255), 29);
 /// ```
 #[inline]
 pub fn luma_bt601(r: u8, g: u8, b: u8) -> u8 {
-    ((4899 * r as u32 + 9617 * g as u32 + 1868 * b as u32 + 8192) >> 14) as u8
+    ((19596 * r as u32 + 38470 * g as u32 + 7470 * b as u32 + 32768) >> 16) as u8
 }
 
 /// Converts any decoded image to 8-bit gray as SPEC 0 says: colour by

@@ -399,7 +399,7 @@ fn strided_view_equals_dense() {
 // --------------------------------------------------------- SPEC 0 convert
 
 fn luma(r: u8, g: u8, b: u8) -> u8 {
-    ((4899 * r as u32 + 9617 * g as u32 + 1868 * b as u32 + 8192) >> 14) as u8
+    ((19596 * r as u32 + 38470 * g as u32 + 7470 * b as u32 + 32768) >> 16) as u8
 }
 
 const RGB: [[u8; 3]; 8] =
@@ -459,6 +459,32 @@ fn colour_and_16_bit_conversion() {
     assert_eq!((g.width, g.height), (3, 2));
     assert_eq!(g.at(2, 1), expect[5]);
     assert_eq!(g.at(0, 1), expect[3]);
+}
+
+/// SPEC 0 on every one of the 2^24 colours: a 4096x4096 RGB image holding each colour once
+/// (red in the low byte of the index, blue in the high), through `to_gray`, against the
+/// formula. The GPU luma pass is held to `luma_bt601` in tests/gpu_levels.rs, and cv2's
+/// `cvtColor` to it in python/tests/test_detect.py.
+#[test]
+fn luma_is_exact_on_all_2_pow_24_colours() {
+    use image::{DynamicImage as D, ImageBuffer, Rgb};
+    let colour = |x: u32, y: u32| {
+        let i = y * 4096 + x;
+        [i as u8, (i >> 8) as u8, (i >> 16) as u8]
+    };
+    let rgb = ImageBuffer::from_fn(4096, 4096, |x, y| Rgb(colour(x, y)));
+    let g = lfast::image::to_gray(&D::ImageRgb8(rgb)).unwrap();
+    let mut wrong = 0usize;
+    for (i, &v) in g.data.iter().enumerate() {
+        let [r, gr, b] = colour(i as u32 % 4096, i as u32 / 4096);
+        if v != luma(r, gr, b) || v != lfast::image::luma_bt601(r, gr, b) {
+            wrong += 1;
+        }
+    }
+    assert_eq!(wrong, 0, "colours converted off the SPEC 0 formula");
+    // the older 14-bit weights differ from these on some colours: the test can tell them apart
+    let old = |r: u32, g: u32, b: u32| ((4899 * r + 9617 * g + 1868 * b + 8192) >> 14) as u8;
+    assert_eq!((old(0, 0, 250), luma(0, 0, 250)), (29, 28));
 }
 
 #[test]

@@ -375,7 +375,7 @@ fn png(w: u32, h: u32, depth: u8, colour: u8, chunks: &[(&[u8; 4], Vec<u8>)], sc
 }
 
 fn luma(r: u8, g: u8, b: u8) -> u8 {
-    ((4899 * r as u32 + 9617 * g as u32 + 1868 * b as u32 + 8192) >> 14) as u8
+    ((19596 * r as u32 + 38470 * g as u32 + 7470 * b as u32 + 32768) >> 16) as u8
 }
 
 /// RGB colours of a test image: every pixel a different mix.

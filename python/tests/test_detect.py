@@ -51,9 +51,9 @@ def astro_bgr() -> np.ndarray:
 
 
 def luma(bgr: np.ndarray) -> np.ndarray:
-    """SPEC 0: OpenCV's integer BT.601 luma, (4899 R + 9617 G + 1868 B + 8192) >> 14."""
+    """SPEC 0: OpenCV's integer BT.601 luma, (19596 R + 38470 G + 7470 B + 32768) >> 16."""
     b, g, r = (bgr[..., i].astype(np.uint32) for i in range(3))
-    return ((4899 * r + 9617 * g + 1868 * b + 8192) >> 14).astype(np.uint8)
+    return ((19596 * r + 38470 * g + 7470 * b + 32768) >> 16).astype(np.uint8)
 
 
 @pytest.fixture(scope="module")
@@ -73,6 +73,28 @@ def check_same(got, ref):
 
 def test_bgr_is_converted_by_spec0_luma(det, astro_bgr, astro_ref):
     check_same(det.detectAndCompute(astro_bgr), astro_ref)
+
+
+def test_cv2_gray_first_gives_what_bgr_gives(det, astro_bgr):
+    # a cv2 user who converts to gray first gets exactly the keypoints of one who passes BGR
+    check_same(det.detectAndCompute(cv2.cvtColor(astro_bgr, cv2.COLOR_BGR2GRAY)), det.detectAndCompute(astro_bgr))
+    # and on a larger, noisier colour image (1000x700), where the older 14-bit weights differed
+    rng = np.random.default_rng(3)
+    photo = cv2.resize(astro_bgr, (1000, 700), interpolation=cv2.INTER_CUBIC).astype(np.float32)
+    photo = np.clip(photo + rng.normal(0, 4, photo.shape), 0, 255).astype(np.uint8)
+    check_same(det.detectAndCompute(cv2.cvtColor(photo, cv2.COLOR_BGR2GRAY)), det.detectAndCompute(photo))
+
+
+def test_luma_equals_cv2_on_all_2_pow_24_colours(tmp_path):
+    # SPEC 0 on every colour: lfast.imread of a 4096x4096 PNG holding each colour once
+    # against cv2.cvtColor(COLOR_BGR2GRAY), and against the formula
+    i = np.arange(1 << 24, dtype=np.uint32)
+    bgr = np.stack([(i >> 16) & 255, (i >> 8) & 255, i & 255], axis=-1).astype(np.uint8).reshape(4096, 4096, 3)
+    path = tmp_path / "all_colours.png"
+    assert cv2.imwrite(str(path), bgr, [cv2.IMWRITE_PNG_COMPRESSION, 1])
+    want = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)
+    np.testing.assert_array_equal(want, luma(bgr))
+    np.testing.assert_array_equal(lfast.imread(path), want)
 
 
 def test_bgra_and_single_channel(det, astro_bgr, astro_gray, astro_ref):
