@@ -24,12 +24,10 @@ pub fn data(rel: &str) -> PathBuf {
 
 /// The `lfast` binary with `args` and extra environment variables, not yet started.
 pub fn command(args: &[&dyn AsRef<std::ffi::OsStr>], env: &[(&str, &str)]) -> std::process::Command {
+    // No XDG_RUNTIME_DIR here: the binary sets a private one itself on a
+    // headless machine (src/main.rs, tests/first_run.rs), and the tests count
+    // stderr lines.
     let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_lfast"));
-    // Mesa's Vulkan drivers print a line to stderr when this is unset (headless
-    // machines); the tests count stderr lines.
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        c.env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    }
     for a in args {
         c.arg(a);
     }
