@@ -96,3 +96,19 @@ fn compare_names_a_missing_input() {
     assert!(common::stderr(&o).contains("no/such/image.png"), "{}", show(&o));
     assert!(!dir.path().join("x.png").exists());
 }
+
+#[test]
+fn compare_on_the_gpu_draws_the_cpu_picture() {
+    // lavapipe in CI, where REQUIRE_GPU=1 makes a missing adapter a failure
+    if lfast::testing::context().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let img = common::data("coins.png");
+    let (gpu, cpu) = (dir.path().join("gpu.png"), dir.path().join("cpu.png"));
+    let o = lfast(&[&"compare", &img, &"--out", &gpu, &"--backend", &"gpu"]);
+    assert!(o.status.success(), "{}", show(&o));
+    let o = lfast(&[&"compare", &img, &"--out", &cpu, &"--backend", &"cpu"]);
+    assert!(o.status.success(), "{}", show(&o));
+    assert_eq!(std::fs::read(&gpu).unwrap(), std::fs::read(&cpu).unwrap(), "GPU and CPU pictures differ");
+}

@@ -141,6 +141,11 @@ fn keypoint_label(name: &str, kps: &[KeyPoint]) -> String {
 }
 
 pub(super) fn run(a: CompareArgs) -> Result<bool, CliError> {
+    a.common.pool()?.install(|| picture(&a))
+}
+
+/// Detects, draws and writes the picture, in the `--jobs` pool.
+fn picture(a: &CompareArgs) -> Result<bool, CliError> {
     let mut cfg = a.common.config()?;
     if cfg.n_features == 0 {
         cfg.n_features = DEFAULT_BUDGET;
