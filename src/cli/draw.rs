@@ -61,14 +61,35 @@ fn circle(img: &mut RgbImage, (cx, cy): (i64, i64), r: i64, c: Rgb<u8>) {
     }
 }
 
-/// The overlay as an RGB image.
-pub fn overlay(gray: &Plane<u8>, kps: &[KeyPoint]) -> RgbImage {
-    let mut img = RgbImage::from_fn(gray.width, gray.height, |x, y| {
+/// The colour of pyramid level `octave`.
+pub fn level_colour(octave: i32) -> Rgb<u8> {
+    Rgb(PALETTE[octave.rem_euclid(PALETTE.len() as i32) as usize])
+}
+
+/// The gray image as RGB.
+fn gray_rgb(gray: &Plane<u8>) -> RgbImage {
+    RgbImage::from_fn(gray.width, gray.height, |x, y| {
         let v = gray.at(x, y);
         Rgb([v, v, v])
-    });
+    })
+}
+
+/// Keypoints as rings of one `radius` at their positions, coloured by
+/// pyramid level: where they are, without [`overlay`]'s circles of the
+/// keypoints' sizes, which cover one another on the coarse levels.
+pub fn markers(gray: &Plane<u8>, kps: &[KeyPoint], radius: i64) -> RgbImage {
+    let mut img = gray_rgb(gray);
     for k in kps {
-        let c = Rgb(PALETTE[k.octave.rem_euclid(PALETTE.len() as i32) as usize]);
+        circle(&mut img, (k.pt.x.round() as i64, k.pt.y.round() as i64), radius, level_colour(k.octave));
+    }
+    img
+}
+
+/// The overlay as an RGB image.
+pub fn overlay(gray: &Plane<u8>, kps: &[KeyPoint]) -> RgbImage {
+    let mut img = gray_rgb(gray);
+    for k in kps {
+        let c = level_colour(k.octave);
         let centre = (k.pt.x.round() as i64, k.pt.y.round() as i64);
         let r = ((k.size / 2.0).round() as i64).max(1);
         circle(&mut img, centre, r, c);

@@ -1,4 +1,4 @@
-//! The `lfast` command line: `detect`, `edges` and `info`. `src/main.rs` only
+//! The `lfast` command line: `detect`, `edges`, `info`, `compare`, `eval`, `vo` and `ate`. `src/main.rs` only
 //! calls [`main`]; everything else lives here so it can be tested and reused.
 //!
 //! Exit codes: 0 when every file was done (or skipped), 1 when at least one
@@ -6,6 +6,7 @@
 //! start at all (bad arguments or config, no inputs, an unwritable output
 //! directory, `--backend gpu` with no usable GPU adapter).
 
+mod compare;
 mod detect;
 mod draw;
 mod edges;
@@ -40,6 +41,14 @@ pub enum CliError {
     /// Inconsistent options.
     #[error("{0}")]
     Usage(String),
+    /// A picture (`lfast compare`) cannot be drawn.
+    #[error("{path}: cannot draw the picture: {reason}")]
+    Draw {
+        /// The picture's path.
+        path: PathBuf,
+        /// Why.
+        reason: String,
+    },
 }
 
 #[derive(Parser)]
@@ -116,6 +125,9 @@ enum Cmd {
     /// Monocular visual odometry over a KITTI-format folder, with the ATE when poses exist
     #[command(after_help = vo::VO_AFTER_HELP)]
     Vo(vo::VoArgs),
+    /// One picture: the edge map and the keypoints of L-FAST, FAST-9 and ORB at one budget
+    #[command(after_help = compare::AFTER_HELP)]
+    Compare(compare::CompareArgs),
     /// Absolute trajectory error of a KITTI-format estimate (Umeyama SE(3)/Sim(3), as evo_ape)
     Ate(vo::AteArgs),
 }
@@ -192,6 +204,7 @@ where
         Cmd::Eval(a) => eval::run(a),
         Cmd::Vo(a) => vo::run_vo(a),
         Cmd::Ate(a) => vo::run_ate(a),
+        Cmd::Compare(a) => compare::run(a),
     };
     match r {
         Ok(true) => ExitCode::SUCCESS,

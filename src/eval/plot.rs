@@ -8,10 +8,10 @@ use plotters::style::FontStyle;
 use std::path::Path;
 use std::sync::OnceLock;
 
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 /// Registers the bundled font once; `false` when it cannot be parsed.
-fn font_ready() -> bool {
+pub(crate) fn font_ready() -> bool {
     static READY: OnceLock<bool> = OnceLock::new();
     *READY.get_or_init(|| {
         plotters::style::register_font(FONT, FontStyle::Normal, include_bytes!("../../data/fonts/DejaVuSans.ttf"))
@@ -23,7 +23,7 @@ fn font_ready() -> bool {
 /// not the glyphs' side bearings, so "T " and "T-" collapse ("L-FASTpaper",
 /// "FAST9"): spaces become two thin spaces and hyphens non-breaking hyphens,
 /// which have no kerning pairs in DejaVu Sans.
-fn text(s: &str) -> String {
+pub(crate) fn text(s: &str) -> String {
     s.replace(' ', "\u{2009}\u{2009}").replace('-', "\u{2011}")
 }
 

@@ -1,8 +1,8 @@
 //! The one declaration of the GPU pipeline: every stage, in the order it is
 //! recorded, with its pass type. The stage list [`STAGES`] (compute-pass and
-//! timestamp labels), every shader [`SHADERS`](super::SHADERS), the pipelines
-//! ([`Passes`]), their bind groups ([`Bound`]) and the encode order
-//! ([`Passes::record_all`]) all follow from it, so adding a pass is one edit
+//! timestamp labels), every shader ([`super::SHADERS`]), the pipelines
+//! (`Passes`), their bind groups (`Bound`) and the encode order
+//! (`Passes::record_all`) all follow from it, so adding a pass is one edit
 //! here (plus its `shaders/<stage>.wgsl`, `src/gpu/<stage>.rs`, `src/cpu/<stage>.rs`).
 
 use super::ShaderInfo;
