@@ -50,19 +50,62 @@ pub fn features_json(image: &Path, width: u32, height: u32, kps: &[KeyPoint], de
     serde_json::to_string_pretty(&f).expect("features always serialise")
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same directory and
-/// a rename, so an interrupted run never leaves a partial file.
+/// Writes `bytes` to `path` atomically: see [`write_atomic_with`].
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_with(path, |f| f.write_all(bytes))
+}
+
+/// Writes `path` atomically: `fill` writes the content into a new temporary
+/// file beside it (`.NAME.PID-RANDOM.tmp`, created exclusively), which is then
+/// synced to disk and renamed over `path`. Whatever fails (`fill`, say on a
+/// full disk, the sync or the rename), the temporary file is removed and
+/// `path` keeps what it had: a reader sees the old file or the new one, never
+/// a part. The error names `path`.
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// let p = dir.path().join("a.txt");
+/// lfast::io::write_atomic(&p, b"old").unwrap();
+/// let full = std::io::Error::from(std::io::ErrorKind::StorageFull);
+/// let e = lfast::io::write_atomic_with(&p, |f| {
+///     std::io::Write::write_all(f, b"ne")?;
+///     Err(full)
+/// })
+/// .unwrap_err();
+/// assert!(lfast::io::is_disk_full(&e));
+/// assert_eq!(std::fs::read(&p).unwrap(), b"old");
+/// assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+/// ```
+pub fn write_atomic_with(path: &Path, fill: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>) -> Result<()> {
     let io = |source| Error::Io { path: path.to_path_buf(), source };
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let mut f = std::fs::File::create(&tmp).map_err(io)?;
-    f.write_all(bytes).and_then(|_| f.sync_all()).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io(e)
-    })
+    let prefix = format!(".{name}.{}-", std::process::id());
+    let mut b = tempfile::Builder::new();
+    b.prefix(&prefix).suffix(TMP_SUFFIX).rand_bytes(6);
+    // the mode a plain File::create gives (0666 less the umask), not tempfile's 0600
+    #[cfg(unix)]
+    b.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    // On every early return the NamedTempFile drops, which removes it.
+    let mut tmp = b.tempfile_in(dir).map_err(io)?;
+    fill(tmp.as_file_mut()).map_err(io)?;
+    tmp.as_file().sync_all().map_err(io)?;
+    tmp.persist(path).map_err(|e| io(e.error))?;
+    Ok(())
+}
+
+/// The suffix of [`write_atomic_with`]'s temporary files.
+pub const TMP_SUFFIX: &str = ".tmp";
+
+/// Whether `e` says that the disk is full (ENOSPC) or a quota is exhausted
+/// (EDQUOT): no later write to that file system can succeed until space is freed.
+pub fn is_disk_full(e: &Error) -> bool {
+    match e {
+        Error::Io { source, .. } => {
+            matches!(source.kind(), std::io::ErrorKind::StorageFull | std::io::ErrorKind::QuotaExceeded)
+        }
+        _ => false,
+    }
 }
 
 /// One row of text per keypoint: `x,y,size,angle,response,octave,class_id,descriptor`
@@ -185,13 +228,84 @@ pub fn features_yaml(kps: &[KeyPoint], desc: &[Descriptor]) -> String {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> =
+            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn write_atomic_replaces_the_file_with_the_mode_of_a_plain_create() {
+        let dir = tempfile::tempdir().unwrap();
+        let (p, plain) = (dir.path().join("a.json"), dir.path().join("plain"));
+        write_atomic(&p, b"first").unwrap();
+        write_atomic(&p, b"second").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"second");
+        std::fs::write(&plain, b"").unwrap();
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode(&p), mode(&plain));
+        }
+        assert_eq!(names(dir.path()), ["a.json", "plain"]);
+    }
+
+    #[test]
+    fn every_failure_leaves_no_temporary_file_and_the_old_content() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("x.json");
+        // nothing there yet: a failing writer creates nothing
+        let quota = std::io::Error::from(std::io::ErrorKind::QuotaExceeded);
+        let e = write_atomic_with(&p, |f| f.write_all(&[7; 5000]).and(Err(quota))).unwrap_err();
+        assert!(is_disk_full(&e), "{e}");
+        assert!(e.to_string().contains("x.json"), "{e}");
+        assert!(names(dir.path()).is_empty(), "{:?}", names(dir.path()));
+        // an old file stays whole after a failure half-way through the new one
+        write_atomic(&p, b"old").unwrap();
+        for kind in [std::io::ErrorKind::StorageFull, std::io::ErrorKind::PermissionDenied] {
+            let e = write_atomic_with(&p, |f| f.write_all(b"ne").and(Err(kind.into()))).unwrap_err();
+            assert_eq!(is_disk_full(&e), kind == std::io::ErrorKind::StorageFull);
+            assert_eq!(std::fs::read(&p).unwrap(), b"old");
+            assert_eq!(names(dir.path()), ["x.json"]);
+        }
+        // the rename fails (a directory is in the way): the temporary file goes too
+        let d = dir.path().join("d.json");
+        std::fs::create_dir(&d).unwrap();
+        std::fs::write(d.join("inside"), b"").unwrap();
+        let e = write_atomic(&d, b"data").unwrap_err();
+        assert!(!is_disk_full(&e) && e.to_string().contains("d.json"), "{e}");
+        assert_eq!(names(dir.path()), ["d.json", "x.json"]);
+        // no directory to write in
+        assert!(write_atomic(&dir.path().join("missing/y.json"), b"").is_err());
+        assert_eq!(names(dir.path()), ["d.json", "x.json"]);
+    }
+
+    #[test]
+    fn temporary_names_hide_the_file_and_carry_the_process_id() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("frame.json");
+        let mut seen = String::new();
+        write_atomic_with(&p, |_| {
+            seen = names(dir.path()).concat();
+            Ok(())
+        })
+        .unwrap();
+        let prefix = format!(".frame.json.{}-", std::process::id());
+        assert!(seen.starts_with(&prefix) && seen.ends_with(TMP_SUFFIX), "{seen}");
+        assert_eq!(seen.len(), prefix.len() + 6 + TMP_SUFFIX.len(), "{seen}");
+    }
+
     #[test]
     fn hex_matches_format_for_every_byte() {
         for b in 0..=255u8 {
             let d = [b; 32];
-            assert_eq!(super::hex(&d), format!("{b:02x}").repeat(32));
+            assert_eq!(hex(&d), format!("{b:02x}").repeat(32));
         }
         let d: [u8; 32] = std::array::from_fn(|i| (i * 37 + 11) as u8);
-        assert_eq!(super::hex(&d), d.iter().map(|b| format!("{b:02x}")).collect::<String>());
+        assert_eq!(hex(&d), d.iter().map(|b| format!("{b:02x}")).collect::<String>());
     }
 }

@@ -14,7 +14,7 @@ use crate::{Descriptor, KeyPoint};
 use clap::ValueEnum;
 use rayon::iter::{ParallelBridge, ParallelIterator};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::sync_channel;
 
 pub(super) const AFTER_HELP: &str = "\
@@ -27,6 +27,10 @@ Outputs, for an input IMG (or DIR/sub/IMG found under a directory DIR, which kee
   --draw OUT/IMG.draw.png            keypoints drawn as circles of their size with orientation
 Outputs are written atomically (temporary file + rename). --shard K/N takes files
 i % N == K of the sorted input list, K 0-based (0/4, 1/4, 2/4, 3/4).
+Directories are searched following symbolic links; a link that loops back is
+reported and not followed, and a file reachable twice is processed once.
+A full disk stops the batch at the first failed write; free some space and
+rerun with --skip-existing to finish.
 Exit code: 0 all done or skipped, 1 some files failed, 2 the run could not start.";
 
 /// Output format.
@@ -128,8 +132,12 @@ struct Job<'a> {
     outputs: Vec<PathBuf>,
 }
 
-/// Encodes and writes every output of one file; returns the first output.
-fn write_all(job: &Job, formats: &[Format], st: &Stage) -> crate::Result<()> {
+/// Writes one output file: [`crate::io::write_atomic`] in the binary, a writer
+/// that fails on cue in tests.
+type Write<'a> = &'a dyn Fn(&Path, &[u8]) -> crate::Result<()>;
+
+/// Encodes and writes every output of one file, through `write`.
+fn write_all(job: &Job, formats: &[Format], st: &Stage, write: Write) -> crate::Result<()> {
     let Stage::Detected { width, height, kps, desc, img } = st else { return Ok(()) };
     let mut outs = job.outputs.iter();
     let mut put = |bytes: &[u8]| -> crate::Result<()> {
@@ -137,7 +145,7 @@ fn write_all(job: &Job, formats: &[Format], st: &Stage) -> crate::Result<()> {
         if let Some(dir) = p.parent() {
             std::fs::create_dir_all(dir).map_err(|source| crate::Error::Io { path: dir.to_path_buf(), source })?;
         }
-        crate::io::write_atomic(p, bytes)
+        write(p, bytes)
     };
     for f in formats {
         match f {
@@ -158,6 +166,11 @@ fn write_all(job: &Job, formats: &[Format], st: &Stage) -> crate::Result<()> {
 
 /// Runs `lfast detect`; `Ok(false)` when some file failed.
 pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
+    run_with(a, &crate::io::write_atomic)
+}
+
+/// [`run`] writing every output through `write`.
+fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
     let cfg = a.common.config()?;
     let det = front_end(a.detector, cfg, a.fast_threshold, &a.common)?;
     let backend = det.backend_name();
@@ -180,9 +193,11 @@ pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
     let threads = pool.current_num_threads().max(1);
     let decoders = (threads / 2).clamp(1, 4);
     let next = AtomicUsize::new(0);
+    // set when the disk is full: no file is taken after it
+    let stop = AtomicBool::new(false);
     let (skip_existing, draw) = (a.skip_existing, a.draw);
     std::thread::scope(|s| {
-        let (jobs, next, det) = (&jobs, &next, &det);
+        let (jobs, next, det, stop) = (&jobs, &next, &det, &stop);
         let (tx_dec, rx_dec) = sync_channel::<(usize, Stage)>(2 * threads);
         let (tx_det, rx_det) = sync_channel::<(usize, Stage)>(2 * threads);
         // stage 1: decode
@@ -190,7 +205,7 @@ pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
             let tx = tx_dec.clone();
             s.spawn(move || {
                 loop {
-                    if report::interrupted() {
+                    if report::interrupted() || stop.load(Ordering::Relaxed) {
                         break;
                     }
                     let i = next.fetch_add(1, Ordering::Relaxed);
@@ -243,10 +258,16 @@ pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
             match &st {
                 Stage::Skip => rep.skipped(|| format!("{}: skipped (outputs exist)", job.input.path.display())),
                 Stage::Failed(reason) => rep.failed(&job.input.path, reason),
-                Stage::Detected { kps, .. } => match write_all(job, &formats, &st) {
+                Stage::Detected { kps, .. } => match write_all(job, &formats, &st, write) {
                     Ok(()) => rep.done(kps.len() as u64, || {
                         format!("{}: {} keypoints -> {}", job.input.path.display(), kps.len(), job.outputs[0].display())
                     }),
+                    // no later write can succeed: stop at once, the files written stay
+                    Err(e) if crate::io::is_disk_full(&e) => {
+                        stop.store(true, Ordering::Relaxed);
+                        rep.stopped(&report::disk_full(&e, rep.finished(), jobs.len()));
+                        break;
+                    }
                     Err(e) => rep.failed(&job.input.path, &e.to_string()),
                 },
                 Stage::Decoded(_) => rep.failed(&job.input.path, "internal error: not detected"),
@@ -257,4 +278,84 @@ pub(super) fn run(a: DetectArgs) -> Result<bool, CliError> {
     let ok = rep.finish("keypoints", &tail);
     report::exit_if_interrupted();
     Ok(ok)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+    use std::cell::Cell;
+    use std::ffi::OsStr;
+    use std::io::Write as _;
+
+    fn args(args: &[&OsStr]) -> DetectArgs {
+        let argv = [OsStr::new("lfast"), OsStr::new("detect")].into_iter().chain(args.iter().copied());
+        match super::super::Cli::try_parse_from(argv).expect("valid arguments").cmd {
+            super::super::Cmd::Detect(a) => a,
+            _ => unreachable!("a detect command line"),
+        }
+    }
+
+    /// Every file under `dir`, relative, with its bytes.
+    fn tree(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+        let mut v: Vec<_> = walkdir::WalkDir::new(dir)
+            .into_iter()
+            .map(|e| e.unwrap())
+            .filter(|e| e.file_type().is_file())
+            .map(|e| (e.path().strip_prefix(dir).unwrap().to_path_buf(), std::fs::read(e.path()).unwrap()))
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_full_disk_stops_the_batch_at_the_first_failed_write_and_skip_existing_finishes() {
+        let root = tempfile::tempdir().unwrap();
+        let (inp, out, clean) = (root.path().join("in"), root.path().join("out"), root.path().join("clean"));
+        std::fs::create_dir(&inp).unwrap();
+        let frame = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/chessboard_GRAY.png")).unwrap();
+        for i in 0..6 {
+            std::fs::write(inp.join(format!("f{i}.png")), &frame).unwrap();
+        }
+        let run_to = |dir: &Path, extra: &[&str], write: Write| {
+            let mut v: Vec<&OsStr> = vec![inp.as_os_str(), OsStr::new("--out"), dir.as_os_str()];
+            v.extend(["--format", "json,csv", "--backend", "cpu", "--jobs", "2", "--quiet"].map(OsStr::new));
+            v.extend(extra.iter().map(OsStr::new));
+            run_with(args(&v), write)
+        };
+        assert!(run_to(&clean, &[], &crate::io::write_atomic).unwrap());
+        let want = tree(&clean);
+        assert_eq!(want.len(), 12);
+
+        // the fifth write (the first output of the third file finished) meets a
+        // full disk half-way through; every later one would too
+        let calls = Cell::new(0);
+        let full = |p: &Path, bytes: &[u8]| -> crate::Result<()> {
+            calls.set(calls.get() + 1);
+            if calls.get() < 5 {
+                return crate::io::write_atomic(p, bytes);
+            }
+            crate::io::write_atomic_with(p, |f| {
+                f.write_all(&bytes[..bytes.len() / 2])?;
+                Err(std::io::ErrorKind::StorageFull.into())
+            })
+        };
+        assert!(!run_to(&out, &[], &full).unwrap(), "a full disk fails the batch");
+        assert_eq!(calls.get(), 5, "no write is tried after the disk is full");
+        let got = tree(&out);
+        assert_eq!(got.len(), 4, "two files' outputs, nothing else (no temporary file): {got:?}");
+        for f in &got {
+            assert!(want.contains(f), "{} is whole", f.0.display());
+        }
+
+        // space freed: --skip-existing does the rest, and the result is the clean run's
+        let calls = Cell::new(0);
+        let counting = |p: &Path, bytes: &[u8]| {
+            calls.set(calls.get() + 1);
+            crate::io::write_atomic(p, bytes)
+        };
+        assert!(run_to(&out, &["--skip-existing"], &counting).unwrap());
+        assert_eq!(calls.get(), 8, "only the four files not done are written");
+        assert_eq!(tree(&out), want);
+    }
 }

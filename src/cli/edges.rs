@@ -8,6 +8,7 @@ use crate::cpu::classify;
 use image::ExtendedColorType;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::sync_channel;
 
 pub(super) const AFTER_HELP: &str = "\
@@ -20,7 +21,7 @@ Outputs, for an input IMG (or DIR/sub/IMG found under a directory DIR, which kee
                           weak-weak blue, none black
   OUT/IMG.threshold.png   the local threshold TL1 of each pixel's window
 With one input file and --out FILE.png (not an existing directory), the edge map is
-written to FILE.png itself.";
+written to FILE.png itself. A full disk stops the batch at the first failed write.";
 
 #[derive(clap::Args)]
 pub(super) struct EdgesArgs {
@@ -140,13 +141,15 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
     report::catch_interrupts();
     let mut rep = Reporter::new(jobs.len() as u64, a.common.quiet);
     let threads = pool.current_num_threads();
+    // set when the disk is full: no file is started after it
+    let stop = AtomicBool::new(false);
     std::thread::scope(|s| {
         let (tx, rx) = sync_channel(2 * threads.max(1));
-        let (jobs, det, debug) = (&jobs, &det, a.debug);
+        let (jobs, det, debug, stop) = (&jobs, &det, a.debug, &stop);
         s.spawn(move || {
             pool.install(|| {
                 jobs.par_iter().enumerate().for_each_with(tx, |tx, (i, (input, path))| {
-                    if report::interrupted() {
+                    if report::interrupted() || stop.load(Ordering::Relaxed) {
                         return;
                     }
                     let r = match &input.problem {
@@ -163,9 +166,20 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
                 break;
             }
             let (input, path) = &jobs[i];
-            match r.and_then(|(files, n)| write(&files).map(|_| n).map_err(|e| e.to_string())) {
-                Ok(n) => rep.done(n, || format!("{}: {n} edge pixels -> {}", input.path.display(), path.display())),
+            match r {
                 Err(reason) => rep.failed(&input.path, &reason),
+                Ok((files, n)) => match write(&files) {
+                    Ok(()) => {
+                        rep.done(n, || format!("{}: {n} edge pixels -> {}", input.path.display(), path.display()))
+                    }
+                    // no later write can succeed: stop at once, the files written stay
+                    Err(e) if crate::io::is_disk_full(&e) => {
+                        stop.store(true, Ordering::Relaxed);
+                        rep.stopped(&report::disk_full(&e, rep.finished(), jobs.len()));
+                        break;
+                    }
+                    Err(e) => rep.failed(&input.path, &e.to_string()),
+                },
             }
         }
     });

@@ -2,7 +2,7 @@
 //! a sorted list of images with their output names, and sharding it.
 
 use super::CliError;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
@@ -65,27 +65,42 @@ fn has_glob_chars(s: &str) -> bool {
     s.contains(['*', '?', '['])
 }
 
-/// Walks `dir` recursively for images, skipping hidden entries and `skip` (the
-/// output directory, so outputs are never taken as inputs).
-fn walk(root: &Path, dir: &Path, skip: Option<&Path>, out: &mut Vec<Input>) -> Result<(), CliError> {
-    let rd = std::fs::read_dir(dir).map_err(|e| CliError::Inputs(format!("{}: {e}", dir.display())))?;
-    let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
-    entries.sort();
-    for p in entries {
-        if is_hidden(&p) {
-            continue;
-        }
-        if p.is_dir() {
-            if skip.is_some_and(|s| p.canonicalize().is_ok_and(|c| c == s)) {
-                continue;
+/// Walks `root` recursively for images in file-name order, following
+/// symbolic links, skipping hidden entries and `skip` (the output directory,
+/// so outputs are never taken as inputs). A link back to one of its own
+/// ancestors (a loop) is not followed but becomes an input with a problem
+/// naming it and the directory it leads back to, so that the batch reports
+/// it on one error line and goes on; an unreadable directory or a broken link
+/// named like an image likewise.
+fn walk(root: &Path, skip: Option<&Path>, out: &mut Vec<Input>) {
+    let skipped = |e: &walkdir::DirEntry| {
+        e.depth() > 0
+            && (is_hidden(e.path())
+                || (e.file_type().is_dir() && skip.is_some_and(|s| e.path().canonicalize().is_ok_and(|c| c == s))))
+    };
+    let rel = |p: &Path| without_extension(p.strip_prefix(root).unwrap_or(p));
+    let entries = walkdir::WalkDir::new(root).follow_links(true).sort_by_file_name().into_iter();
+    for r in entries.filter_entry(|e| !skipped(e)) {
+        match r {
+            Ok(e) if e.file_type().is_file() && is_image(e.path()) => {
+                out.push(Input { path: e.path().to_path_buf(), rel: rel(e.path()), problem: None })
             }
-            walk(root, &p, skip, out)?;
-        } else if is_image(&p) {
-            let rel = without_extension(p.strip_prefix(root).unwrap_or(&p));
-            out.push(Input { path: p, rel, problem: None });
+            Ok(_) => {}
+            Err(err) => {
+                let path = err.path().unwrap_or(root).to_path_buf();
+                let problem = match (err.loop_ancestor(), err.io_error()) {
+                    (Some(ancestor), _) => {
+                        format!("symbolic link loop (leads back to {}), not followed", ancestor.display())
+                    }
+                    // a dangling link is an input only when named like one
+                    _ if path.is_symlink() && !path.exists() && !is_image(&path) => continue,
+                    (None, Some(io)) => io.to_string(),
+                    (None, None) => err.to_string(),
+                };
+                out.push(Input { rel: rel(&path), path, problem: Some(problem) });
+            }
         }
     }
-    Ok(())
 }
 
 fn file_input(p: PathBuf) -> Input {
@@ -98,7 +113,8 @@ fn file_input(p: PathBuf) -> Input {
 /// file fails later with its own error line).
 fn add(arg: &Path, skip: Option<&Path>, out: &mut Vec<Input>) -> Result<(), CliError> {
     if arg.is_dir() {
-        return walk(arg, arg, skip, out);
+        walk(arg, skip, out);
+        return Ok(());
     }
     let s = arg.to_string_lossy();
     if !arg.exists() && has_glob_chars(&s) {
@@ -107,7 +123,7 @@ fn add(arg: &Path, skip: Option<&Path>, out: &mut Vec<Input>) -> Result<(), CliE
         for p in paths.flatten() {
             n += 1;
             if p.is_dir() {
-                walk(&p, &p, skip, out)?;
+                walk(&p, skip, out);
             } else if is_image(&p) {
                 out.push(file_input(p));
             }
@@ -134,8 +150,20 @@ fn read_list(list: &Path) -> Result<Vec<PathBuf>, CliError> {
     Ok(lines.iter().map(|l| l.trim()).filter(|l| !l.is_empty() && !l.starts_with('#')).map(PathBuf::from).collect())
 }
 
-/// All inputs, sorted by path and without duplicates; inputs whose output name
-/// collides with an earlier one's get a `problem`. `out_dir` is never walked.
+/// Where the entry `p` itself lives: its directory's canonical path and its
+/// name (its target is not resolved).
+fn link_location(p: &Path) -> PathBuf {
+    match (p.parent().and_then(|d| d.canonicalize().ok()), p.file_name()) {
+        (Some(dir), Some(name)) => dir.join(name),
+        _ => p.to_path_buf(),
+    }
+}
+
+/// All inputs, sorted by path; each file once, by its canonical path, under
+/// the path it was first found by (arguments in order, directories in
+/// file-name order), even when links make it reachable twice. Inputs whose
+/// output name collides with an earlier one's get a `problem`. `out_dir` is
+/// never walked.
 pub fn collect(args: &[PathBuf], list: Option<&Path>, out_dir: &Path) -> Result<Vec<Input>, CliError> {
     let mut named: Vec<PathBuf> = args.to_vec();
     if let Some(l) = list {
@@ -152,10 +180,15 @@ pub fn collect(args: &[PathBuf], list: Option<&Path>, out_dir: &Path) -> Result<
     if all.is_empty() {
         return Err(CliError::Inputs("no images found in the inputs".into()));
     }
+    let (mut files, mut problems) = (HashSet::new(), HashSet::new());
+    all.retain(|i| match i.problem {
+        None => files.insert(i.path.canonicalize().unwrap_or_else(|_| i.path.clone())),
+        // a link by its own location, so that a loop reached twice is named once
+        Some(_) => problems.insert(link_location(&i.path)),
+    });
     all.sort_by(|a, b| a.path.cmp(&b.path));
-    all.dedup_by(|a, b| a.path == b.path);
     let mut seen: HashMap<PathBuf, PathBuf> = HashMap::new();
-    for i in &mut all {
+    for i in all.iter_mut().filter(|i| i.problem.is_none()) {
         match seen.get(&i.rel) {
             Some(first) => {
                 i.problem = Some(format!("output name {} is already used by {}", i.rel.display(), first.display()))

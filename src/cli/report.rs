@@ -3,8 +3,11 @@
 
 use super::CliError;
 use indicatif::{ProgressBar, ProgressState, ProgressStyle};
+use signal_hook::consts::{SIGINT, SIGTERM};
+use signal_hook::flag;
 use std::io::IsTerminal;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Counts of one run.
@@ -63,23 +66,38 @@ impl Reporter {
         if let Some(b) = &self.bar {
             b.inc(1);
         } else if self.lines {
-            println!("{}", line());
+            println!("{}", one_line(&line()));
         }
     }
 
     /// A file failed: one line on stderr naming it and the reason.
     pub fn failed(&mut self, path: &Path, reason: &str) {
-        self.counts.failed += 1;
         // one line per file, whatever the decoder's message holds (zune-jpeg's end in '\n')
         let reason = reason.split_whitespace().collect::<Vec<_>>().join(" ");
-        let line = format!("lfast: {}: {reason}", path.display());
+        self.error_line(&format!("lfast: {}: {reason}", path.display()));
+        if let Some(b) = &self.bar {
+            b.inc(1);
+        }
+    }
+
+    /// The batch cannot go on (a full disk): the file being written counts as
+    /// failed, and `line` is printed on stderr as `lfast: LINE`.
+    pub fn stopped(&mut self, line: &str) {
+        self.error_line(&format!("lfast: {line}"));
+    }
+
+    fn error_line(&mut self, line: &str) {
+        self.counts.failed += 1;
+        let line = one_line(line);
         match &self.bar {
-            Some(b) => {
-                b.suspend(|| eprintln!("{line}"));
-                b.inc(1);
-            }
+            Some(b) => b.suspend(|| eprintln!("{line}")),
             None => eprintln!("{line}"),
         }
+    }
+
+    /// Files finished so far: done or skipped because their outputs exist.
+    pub fn finished(&self) -> u64 {
+        self.counts.done + self.counts.skipped
     }
 
     /// Clears the bar and prints the summary line on stdout; `what` names the
@@ -103,53 +121,48 @@ impl Reporter {
     }
 }
 
-/// The signal that interrupted the batch (SIGINT, SIGTERM), 0 while none did.
-static INTERRUPTED: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(0);
-
-#[cfg(unix)]
-extern "C" fn on_interrupt(sig: libc::c_int) {
-    // Only async-signal-safe work here: note the signal and restore the
-    // default action, so a second Ctrl-C ends the process at once.
-    INTERRUPTED.store(sig, std::sync::atomic::Ordering::SeqCst);
-    // SAFETY: signal() is async-signal-safe; SIG_DFL is a valid action.
-    unsafe {
-        libc::signal(sig, libc::SIG_DFL);
-    }
-}
+/// Set by the first SIGINT or SIGTERM after [`catch_interrupts`].
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// The signal that set [`INTERRUPTED`], 0 while none did.
+static SIGNAL: AtomicUsize = AtomicUsize::new(0);
 
 /// Makes SIGINT and SIGTERM stop a batch between files instead of killing it
 /// in the middle of writing one: no file is taken after the signal, the file
 /// being written is completed, its temporary files are renamed, the summary is
 /// printed, and [`exit_if_interrupted`] then ends the process by the signal.
+/// A second signal has the default action at once (a second Ctrl-C kills).
+/// signal-hook's handlers only store to atomics, which is async-signal-safe.
 pub fn catch_interrupts() {
-    #[cfg(unix)]
-    // SAFETY: the handler only stores to an atomic and calls signal().
-    unsafe {
-        let h = on_interrupt as extern "C" fn(libc::c_int) as libc::sighandler_t;
-        libc::signal(libc::SIGINT, h);
-        libc::signal(libc::SIGTERM, h);
-    }
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        for sig in [SIGINT, SIGTERM] {
+            // in registration order: the default action when already set, then note it
+            let r = flag::register_conditional_default(sig, &INTERRUPTED)
+                .and_then(|_| flag::register_usize(sig, &SIGNAL, sig as usize))
+                .and_then(|_| flag::register(sig, &INTERRUPTED));
+            if let Err(e) = r {
+                eprintln!("lfast: warning: cannot catch signal {sig} ({e}); it will stop the batch mid-file");
+            }
+        }
+    });
 }
 
 /// Whether SIGINT or SIGTERM arrived since [`catch_interrupts`].
 pub fn interrupted() -> bool {
-    INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst) != 0
+    INTERRUPTED.load(Ordering::SeqCst)
 }
 
 /// After an interrupted batch has printed its summary: a note on stderr, then
 /// the signal again with its default action, so the parent (a shell loop, a
 /// job runner) sees the process ended by it. Returns when nothing interrupted.
 pub fn exit_if_interrupted() {
-    let sig = INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst);
-    if sig == 0 {
+    if !interrupted() {
         return;
     }
     eprintln!("lfast: interrupted; finished files are complete, rerun with --skip-existing to do the rest");
-    #[cfg(unix)]
-    // SAFETY: restoring the default action and raising a signal are plain libc calls.
-    unsafe {
-        libc::signal(sig, libc::SIG_DFL);
-        libc::raise(sig);
+    let sig = SIGNAL.load(Ordering::SeqCst) as i32;
+    if sig != 0 {
+        let _ = signal_hook::low_level::emulate_default_handler(sig);
     }
     std::process::exit(130);
 }
@@ -179,6 +192,38 @@ pub fn log_warnings(quiet: bool) {
     }
 }
 
+/// `s` on one line: control characters (newline, carriage return, tab, escape
+/// and the rest of Unicode's Cc) and the Unicode line and paragraph separators
+/// are written as Rust escapes (`\n`, `\u{1b}`), so that a file name holding
+/// them still gives one line per file. The JSON output keeps the exact name.
+pub fn one_line(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        if c.is_control() || c == '\u{2028}' || c == '\u{2029}' {
+            out.extend(c.escape_debug());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The line that stops a batch on a full disk (`e` is a
+/// [`crate::io::is_disk_full`] error): what was being written, how far the
+/// batch got, and how to finish it.
+pub fn disk_full(e: &crate::Error, finished: u64, total: usize) -> String {
+    let (path, why) = match e {
+        crate::Error::Io { path, source } if source.kind() == std::io::ErrorKind::QuotaExceeded => {
+            (path.display().to_string(), "disk quota exceeded")
+        }
+        crate::Error::Io { path, .. } => (path.display().to_string(), "no space left on device"),
+        other => (other.to_string(), "no space left on device"),
+    };
+    format!(
+        "disk full writing {path}: {finished} of {total} files done ({why}); free some space and rerun with --skip-existing to finish"
+    )
+}
+
 /// The reason of a per-file error, without the path (the line names it first).
 pub fn reason(e: &crate::Error) -> String {
     match e {
@@ -200,18 +245,21 @@ pub fn prepare_out_dir(dir: &Path) -> Result<(), CliError> {
     let probe = dir.join(format!(".lfast-write-check.{}.tmp", std::process::id()));
     std::fs::write(&probe, b"").map_err(bad)?;
     let _ = std::fs::remove_file(&probe);
-    remove_stale(dir, 0);
+    remove_stale(dir, 16);
     Ok(())
 }
 
-/// Whether `name` is `.ANY.PID.tmp` for a process that no longer runs.
+/// Whether `name` is a temporary file of [`crate::io::write_atomic`]
+/// (`.ANY.PID-RANDOM.tmp`, or `.ANY.PID.tmp` of earlier versions) left by a
+/// process that no longer runs.
 fn is_stale_tmp(name: &str) -> bool {
-    let Some(inner) = name.strip_prefix('.').and_then(|n| n.strip_suffix(".tmp")) else {
+    let Some(inner) = name.strip_prefix('.').and_then(|n| n.strip_suffix(crate::io::TMP_SUFFIX)) else {
         return false;
     };
-    let Some((_, pid)) = inner.rsplit_once('.') else {
+    let Some((_, last)) = inner.rsplit_once('.') else {
         return false;
     };
+    let pid = last.split_once('-').map_or(last, |(pid, _)| pid);
     let Ok(pid) = pid.parse::<u32>() else {
         return false;
     };
@@ -219,15 +267,42 @@ fn is_stale_tmp(name: &str) -> bool {
     cfg!(target_os = "linux") && pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
 }
 
-fn remove_stale(dir: &Path, depth: u32) {
-    let Ok(rd) = std::fs::read_dir(dir) else { return };
-    for e in rd.flatten() {
-        let p = e.path();
-        let Ok(ft) = e.file_type() else { continue };
-        if ft.is_dir() && depth < 16 {
-            remove_stale(&p, depth + 1);
-        } else if ft.is_file() && e.file_name().to_str().is_some_and(is_stale_tmp) {
-            let _ = std::fs::remove_file(&p);
-        }
+/// Removes the stale temporary files under `dir` (16 levels deep at most,
+/// symbolic links not followed).
+fn remove_stale(dir: &Path, max_depth: usize) {
+    let stale = walkdir::WalkDir::new(dir)
+        .max_depth(max_depth)
+        .into_iter()
+        .flatten()
+        .filter(|e| e.file_type().is_file() && e.file_name().to_str().is_some_and(is_stale_tmp));
+    for e in stale {
+        let _ = std::fs::remove_file(e.path());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_line_escapes_control_characters_only() {
+        assert_eq!(one_line("in/new\nline.png"), r"in/new\nline.png");
+        assert_eq!(one_line("a\r\tb\u{1b}[31m\u{7f}\u{85}\u{2028}"), r"a\r\tb\u{1b}[31m\u{7f}\u{85}\u{2028}");
+        assert_eq!(one_line("été/ü ñ 画像.png"), "été/ü ñ 画像.png");
+        assert!(!one_line(&(0..=0x10ffu32).filter_map(char::from_u32).collect::<String>()).contains(['\n', '\r']));
+    }
+
+    #[test]
+    fn stale_temporaries_are_those_of_dead_processes() {
+        let dead = u32::MAX - 1; // above Linux's pid_max
+        let me = std::process::id();
+        let linux = cfg!(target_os = "linux");
+        assert_eq!(is_stale_tmp(&format!(".x.json.{dead}-a1B2c3.tmp")), linux);
+        assert_eq!(is_stale_tmp(&format!(".x.json.{dead}.tmp")), linux);
+        assert!(!is_stale_tmp(&format!(".x.json.{me}-a1B2c3.tmp")));
+        assert!(!is_stale_tmp(&format!(".x.json.{me}.tmp")));
+        assert!(!is_stale_tmp("x.json.123-abcdef.tmp"));
+        assert!(!is_stale_tmp(".x.json.abc-123.tmp"));
+        assert!(!is_stale_tmp(".x.json"));
     }
 }
