@@ -3,6 +3,7 @@
 //! characters. (The full disk without root, where no tmpfs can be mounted, is
 //! `cli::detect::tests::a_full_disk_stops_the_batch_at_the_first_failed_write_and_skip_existing_finishes`,
 //! with a writer that fails on cue.)
+#![cfg(unix)]
 
 mod common;
 
@@ -208,4 +209,30 @@ fn a_full_tmpfs_stops_the_batch_with_one_line_and_skip_existing_finishes() {
     for f in &want {
         assert_eq!(std::fs::read(out.join(f)).unwrap(), std::fs::read(clean.join(f)).unwrap(), "{f}");
     }
+}
+
+#[test]
+fn a_full_tmpfs_stops_lfast_edges_with_one_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("in");
+    std::fs::create_dir(&dir).unwrap();
+    for i in 0..20 {
+        std::fs::copy(common::data("coins.png"), dir.join(format!("f{i:02}.png"))).unwrap();
+    }
+    let out = tmp.path().join("out");
+    let Some(_fs) = Tmpfs::mount(&out, "64k") else {
+        assert!(std::env::var_os("CI").is_none(), "CI runs as root and must mount a tmpfs for this test");
+        eprintln!("no tmpfs without root: not checked here");
+        return;
+    };
+    let o = lfast(&[&"edges", &dir, &"--out", &out, &"--debug", &"--backend", &"cpu"]);
+    assert_eq!(o.status.code(), Some(1), "{}", show(&o));
+    let err = stderr(&o);
+    assert_eq!(err.lines().count(), 1, "{}", show(&o));
+    let (done, _, failed) = summary(&o);
+    assert!(done < 20 && failed == 1, "{}", show(&o));
+    assert!(err.starts_with(&format!("lfast: disk full writing {}/f", out.display())), "{err}");
+    assert!(err.contains(&format!(": {done} of 20 files done")), "{err}");
+    let got = files(&out);
+    assert!(got.iter().all(|f| !f.starts_with('.')), "no temporary file: {got:?}");
 }
