@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <string>
@@ -206,6 +207,21 @@ static void orbextractor_checks(const cv::Mat& img, const std::string& path) {
     CHECK(ex(cv::Mat(), cv::Mat(), kps, desc, none) == -1, "ORBextractor on an empty image");
 }
 
+// With REQUIRE_GPU=1 (CI, on lavapipe) the GPU backend must open and give
+// the CPU's features bit for bit.
+static void gpu_checks(const cv::Mat& img, const std::vector<cv::KeyPoint>& kps, const cv::Mat& desc,
+                       const std::string& path) {
+    const char* require = std::getenv("REQUIRE_GPU");
+    if (!require || std::string(require) != "1") return;
+    cv::Ptr<lfast::LFast> g = lfast::LFast::create(lfast::default_config(), lfast::Backend::Gpu);
+    CHECK(g->backend() == "gpu", "the GPU backend runs on " << g->backend());
+    std::vector<cv::KeyPoint> k;
+    cv::Mat d;
+    g->detectAndCompute(img, cv::noArray(), k, d);
+    CHECK(same(k, kps) && same(d, desc), path << ": GPU features differ from the CPU's");
+    std::cout << path << ": GPU (" << k.size() << " keypoints) = CPU" << std::endl;
+}
+
 int main(int argc, char** argv) {
     if (argc < 3) {
         std::cerr << "usage: " << argv[0] << " DUMP_DIR IMAGE..." << std::endl;
@@ -229,6 +245,7 @@ int main(int argc, char** argv) {
                   << " keypoints" << std::endl;
         dump(argv[1], path, kps, desc);
         if (i == 2) {
+            gpu_checks(img, kps, desc, path);
             feature2d_checks(f, img, kps, desc, path);
             bad_input(f, img);
             orbextractor_checks(img, path);
