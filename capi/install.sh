@@ -6,8 +6,9 @@
 # PREFIX/lib/liblfast.so.0.1.0 (+ liblfast.so.0, liblfast.so), PREFIX/lib/liblfast.a,
 # PREFIX/include/lfast/{lfast.h,lfast.hpp,lfast_opencv.hpp,orbextractor.hpp},
 # PREFIX/lib/cmake/lfast/ (find_package(lfast) -> lfast::lfast, lfast::lfast_static)
-# and PREFIX/lib/pkgconfig/lfast.pc. Needs cargo; the C++ headers need a C++17
-# compiler, the OpenCV ones OpenCV 4 (docs/cpp.md).
+# PREFIX/lib/pkgconfig/lfast.pc, and ORB-SLAM3's drop-in header
+# PREFIX/share/lfast/orbslam/ORBextractor.h. Needs cargo; the C++ headers need
+# C++11 or later (C++17 is their target), the OpenCV ones OpenCV 4 (docs/cpp.md).
 set -euo pipefail
 
 prefix="${1:-/usr/local}"
@@ -35,6 +36,9 @@ ln -sfn "liblfast.so.0" "$lib/liblfast.so"
 strip_copy "$target/release/liblfast_capi.a" "$lib/liblfast.a"
 chmod 644 "$lib/liblfast.a"
 install -m 644 "$here"/include/lfast/*.h "$here"/include/lfast/*.hpp "$prefix/include/lfast/"
+# ORB-SLAM3's drop-in include/ORBextractor.h (docs/orbslam.md)
+install -d "$prefix/share/lfast/orbslam"
+install -m 644 "$here/orbslam/ORBextractor.h" "$prefix/share/lfast/orbslam/"
 
 flags=""
 for l in $native_libs; do flags="$flags -l$l"; done
