@@ -15,11 +15,8 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let mut builder = cbindgen::Builder::new().with_config(config);
-    for file in ["lib.rs", "image.rs", "status.rs"] {
-        builder = builder.with_src(capi.join("src").join(file));
-    }
-    let bindings = match builder.generate() {
+    // cbindgen follows lib.rs's `mod` declarations into the other files
+    let bindings = match cbindgen::Builder::new().with_config(config).with_src(capi.join("src/lib.rs")).generate() {
         Ok(b) => b,
         Err(e) => {
             eprintln!("cbindgen cannot parse capi/src: {e}");
