@@ -93,10 +93,10 @@ pub mod counter {
     pub const EDGES: usize = 4;
     /// Entries of the walk list (`walks`, appended by rules).
     pub const WALKS: usize = 5;
-    /// The largest order key of the frame's corners (select).
-    pub const KEY_MAX: usize = 6;
-    /// The smallest order key of the frame's corners (select).
-    pub const KEY_MIN: usize = 7;
+    /// The largest response magnitude (`|r|` as bits) of the frame's corners (select).
+    pub const MAG_MAX: usize = 6;
+    /// The smallest response magnitude of the frame's corners (select).
+    pub const MAG_MIN: usize = 7;
     /// Words in the buffer.
     pub const LEN: usize = 8;
 }
