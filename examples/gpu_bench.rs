@@ -1,5 +1,6 @@
 //! GPU timings on real frames: per-pass times from timestamp queries,
 //! single-frame latency (upload -> keypoints + descriptors in host memory),
+//! the host side of the readback alone (a mapped staging buffer -> `Frame`),
 //! and sustained throughput with frames in flight through the staging ring.
 //!
 //! ```text
@@ -8,6 +9,15 @@
 //! Options: `--frames N` (default 30), `--ring R` (frames in flight, default 3),
 //! `--size WxH` (resize every frame first, bilinear: e.g. 1920x1080 from KITTI),
 //! `--json FILE` (machine-readable results).
+
+const USAGE: &str = "usage: gpu_bench DIR|IMAGE... [--frames N] [--ring R] [--size WxH] [--json FILE]
+  DIR|IMAGE  PNG frames (a directory: its *.png, sorted)
+  --frames N frames to use (default 30)
+  --ring R   frames in flight for the sustained figure (default 3)
+  --size WxH resize every frame first (bilinear), e.g. 1920x1080
+  --json FILE write the results as JSON
+Prints per-pass GPU times (timestamp queries), latency, the host-side readback
+time, GPU time back to back, record + submit time and sustained throughput.";
 
 use lfast::gpu::detector::{GpuDetector, GpuDetectorOptions, GpuInput, STAGES};
 use lfast::gpu::{GpuContext, GpuOptions};
@@ -44,6 +54,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let (w, h) = v.split_once('x').ok_or("--size WxH, e.g. 1920x1080")?;
                 size = Some((w.parse()?, h.parse()?));
             }
+            "-h" | "--help" => {
+                println!("{USAGE}");
+                return Ok(());
+            }
+            _ if a.starts_with('-') => return Err(format!("unknown option {a}\n{USAGE}").into()),
             _ => inputs.push(std::path::PathBuf::from(a)),
         }
     }
@@ -115,6 +130,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         kps += f.keypoints.len();
     }
     let ws = ws.as_mut().ok_or("workspace")?;
+    // host side of the readback alone: wait until the frame's staging buffer
+    // is mapped, then time turning it into a Frame (count, casts, copies of
+    // the used part, exact angles, unmap)
+    let mut host = Vec::new();
+    for img in &imgs {
+        ws.write_gray(&ctx.queue, img.view())?;
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        det.encode(&mut enc, GpuInput::Written, ws)?;
+        let tk = det.encode_readback(&mut enc, ws)?;
+        ctx.queue.submit([enc.finish()]);
+        det.start_readback(ws, tk)?;
+        ctx.wait()?;
+        let t = Instant::now();
+        let f = det.finish_readback(ws, tk)?;
+        host.push(t.elapsed().as_secs_f64() * 1e3);
+        std::hint::black_box(f);
+    }
     // GPU time per frame with nothing read back: every frame recorded and
     // submitted back to back, one wait at the end (gaps between passes included)
     let reps = 4;
@@ -171,17 +203,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let gpu = median(&mut gpu_total);
     let gpu_lo = gpu_total.iter().copied().fold(f64::INFINITY, f64::min);
     let l = median(&mut lat);
+    let host_lo = host.iter().copied().fold(f64::INFINITY, f64::min);
+    let host_ms = median(&mut host);
     let enc_ms = median(&mut encode_ms);
     let fps = done as f64 / secs;
     println!("  {:<16} {gpu:9.3} ms {gpu_lo:9.3} ms", "sum of passes");
     println!("\nlatency upload -> keypoints + descriptors on the host: {l:.3} ms (median)");
+    println!(
+        "host-side readback, mapped -> keypoints + descriptors: {host_ms:.4} ms (median), {host_lo:.4} ms (minimum)"
+    );
     println!("GPU time per frame, back to back, no readback: {gpu_only:.3} ms");
     println!("CPU time to record + submit a frame: {enc_ms:.3} ms (median)");
     println!("sustained, {} in flight: {fps:.1} frames/s ({:.3} ms per frame)", ws.ring_len(), 1e3 / fps);
     println!("mean keypoints per frame: {:.1}", kps as f64 / imgs.len() as f64);
     if let Some(p) = json {
         let s = format!(
-            "{{\"adapter\": \"{}\", \"frames\": {}, \"width\": {w}, \"height\": {h}, \"latency_ms\": {l:.4}, \"gpu_only_ms\": {gpu_only:.4}, \"encode_ms\": {enc_ms:.4}, \"fps\": {fps:.2}, \"gpu_sum_ms\": {gpu:.4}, \"passes_ms\": {{{}}}}}\n",
+            "{{\"adapter\": \"{}\", \"frames\": {}, \"width\": {w}, \"height\": {h}, \"latency_ms\": {l:.4}, \"readback_host_ms\": {host_ms:.4}, \"gpu_only_ms\": {gpu_only:.4}, \"encode_ms\": {enc_ms:.4}, \"fps\": {fps:.2}, \"gpu_sum_ms\": {gpu:.4}, \"passes_ms\": {{{}}}}}\n",
             ctx.info.name,
             imgs.len(),
             rows.join(", ")

@@ -8,6 +8,11 @@
 // in registers, so they never reach memory (two passes through a u32 plane,
 // `blur_tmp`, took 4.3 ms per KITTI frame on lavapipe; this one pass 2.2).
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/blur.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: no atomics. Each invocation stores only the `smoothed` words of its
+// own four columns of its tile (quad_span); a tile's 16 rows are 4 whole words
+// of a column (common.wgsl pk_word) and the quads of the tile list do not
+// overlap, so no two invocations write one word.
 
 // `gray` is column-packed (common.wgsl pk_word).
 @group(0) @binding(1) var<storage, read> gray: array<u32>;

@@ -10,6 +10,9 @@
 // in one dispatch; then `args`, one invocation.
 // Tests: tests/gpu_keypoints.rs (response and corner NMS alone run after it);
 // tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: each candidate takes its own slot of `cand_list` with an atomicAdd on
+// counters[CANDS]; `indirect` is stored by the single invocation of `args`.
 
 @group(0) @binding(1) var<storage, read> cand: array<u32>;
 @group(0) @binding(2) var<storage, read_write> cand_list: array<u32>;

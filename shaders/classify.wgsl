@@ -4,6 +4,11 @@
 // WEAK_STRONG 3, STRONG 4; column-packed, common.wgsl pk_word). A quad pass, all levels in one dispatch (over
 // the tile list).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/classify.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: no atomics. Each invocation stores only the `classes` words of its
+// own four columns of its tile (quad_span): a tile's 16 rows are 4 whole words
+// of a column (common.wgsl pk_word), and quads do not overlap, so no two
+// invocations write one word.
 
 @group(0) @binding(1) var<storage, read> m: array<u32>;
 @group(0) @binding(2) var<storage, read> nms: array<u32>;

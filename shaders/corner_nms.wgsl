@@ -5,6 +5,9 @@
 // candidate list (cand_list.wgsl). The append order is nondeterministic;
 // select.wgsl puts the list in SPEC 9 order.
 // Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/corner_nms.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: each survivor takes its own slot of `corners` with an atomicAdd on
+// counters[CORNERS] (slots past the capacity are not written); resp is only read.
 
 @group(0) @binding(1) var<storage, read> cand: array<u32>;
 @group(0) @binding(2) var<storage, read> cand_list: array<u32>;

@@ -3,6 +3,11 @@
 // min(M, 255), M = isqrt(S) >> 1; column-packed, common.wgsl pk_word).
 // A column pass, all levels in one dispatch (over the tile list).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/gradient.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: no atomics. Each invocation owns one column of one tile (column_span):
+// gx, gy and s are a word per pixel, and m's words of that column cover its
+// 16 rows exactly (4 whole words, common.wgsl pk_word), so no two invocations
+// write one word.
 
 @group(0) @binding(1) var<storage, read> denoised: array<u32>;
 @group(0) @binding(2) var<storage, read_write> gx: array<i32>;

@@ -7,6 +7,10 @@
 // counted by local_threshold.wgsl's cells, which count every pixel anyway.
 // Tests: tests/gpu_edges_front.rs (this pass == the three staged passes and the
 // CPU) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: no atomics. Each invocation stores only the `m` and `nms` words of its
+// own four columns of its tile (quad_span): 4 whole words per column of a tile
+// (common.wgsl pk_word), quads disjoint, so no two invocations write one word.
 
 @group(0) @binding(1) var<storage, read> denoised: array<u32>;
 @group(0) @binding(2) var<storage, read_write> m: array<u32>;

@@ -6,6 +6,9 @@
 // counts every pixel anyway); this pass is the per-stage reference the tests
 // compare it with.
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/histogram.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: every shared word (the workgroup's bins and the level histograms) is
+// written with atomicAdd only; the m words are only read.
 
 @group(0) @binding(1) var<storage, read> m: array<u32>;
 @group(0) @binding(2) var<storage, read_write> hist: array<atomic<u32>>;

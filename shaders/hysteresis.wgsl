@@ -57,6 +57,14 @@
 // - Levels never connect: neighbours are taken only inside the level's bounds,
 //   and each level owns its own range of atlas indices.
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/hysteresis.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: labels and flags are shared words and are written with atomics only
+// (atomicMin, atomicStore, atomicOr: the union-find above, whose roots
+// come out the same in any interleaving);
+// walk_args, a single invocation, stores `indirect` and pads `walks`;
+// final_edges stores the `edges` words of its walk's four columns (4 whole
+// words per column of a tile, common.wgsl pk_word), and walks are distinct
+// entries, so no two invocations write one word.
 
 @group(0) @binding(1) var<storage, read> ruled: array<u32>;
 @group(0) @binding(2) var<storage, read_write> labels: array<atomic<u32>>;

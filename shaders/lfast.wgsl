@@ -9,6 +9,13 @@
 // A column pass, all levels in one dispatch (over the tile list); the test
 // itself runs on the workgroup's compacted edge pixels (see main).
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/lfast.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: windows stores edge_bits[tile_word(l, x, tile)] from the invocation
+// of column x of that tile only, and its edge-list entries into the range its
+// workgroup reserved (one atomicAdd on counters[EDGES] by lane 0, lanes' offsets
+// from an atomicAdd on the workgroup's count); main sets candidate bits with
+// atomicOr (several pixels share a word of `cand`) and takes its cand_list slot
+// with atomicAdd; the args entry points are single invocations.
 
 @group(0) @binding(1) var<storage, read> edges: array<u32>;
 @group(0) @binding(2) var<storage, read> mask: array<u32>;

@@ -22,6 +22,10 @@
 // return at once. `window_hist` and
 // `hist` are cleared by the pass before it runs.
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/local_threshold.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: the workgroup bins, the level histograms and the window histograms
+// are written with atomicAdd only; stats stores the four words of window t
+// from invocation t only.
 
 @group(0) @binding(1) var<storage, read> m: array<u32>;
 @group(0) @binding(2) var<storage, read> grid: array<u32>;

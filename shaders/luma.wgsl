@@ -16,6 +16,11 @@
 //   then OpenCV's integer BT.601 (alpha ignored). `tex_kind.x` = 1 marks a
 //   one-channel texture: its red channel is the gray value itself.
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/luma.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: no atomics. from_bytes: each invocation stores its own four packed
+// words (four rows of four columns: one word per column); from_texture: its own
+// one word. The words of different invocations are distinct (common.wgsl
+// pk_word), so no two invocations write one word.
 
 @group(0) @binding(1) var<storage, read> input: array<u32>;
 @group(0) @binding(2) var<storage, read_write> gray: array<u32>;

@@ -9,6 +9,10 @@
 // the workgroup loading one descriptor of the tile. `P` (the common prelude's
 // uniform) is declared but unused here.
 // Tests: tests/gpu_matcher.rs (this pass alone == src/cpu/matcher.rs); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: tile[li * WORDS ..] is written by lane li only, between two barriers
+// that every lane reaches (uniform loop bounds); fwd[i], back[j] and
+// matches[i] by invocation i (j) only.
 
 struct MatchParams {
     n_query: u32,

@@ -2,6 +2,10 @@
 // Four columns of a tile per invocation, all levels in one dispatch (over the tile list).
 // `src` (the gray levels) and `dst` (D) are column-packed (common.wgsl pk_word).
 // Tests: tests/gpu_median.rs (this pass alone == src/cpu/median.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: no atomics. Each invocation stores only the `dst` words of its own four
+// columns of its tile (4 whole words per column of a tile, common.wgsl
+// pk_word), quads disjoint, so no two invocations write one word.
 
 @group(0) @binding(1) var<storage, read> src: array<u32>;
 @group(0) @binding(2) var<storage, read_write> dst: array<u32>;

@@ -3,6 +3,10 @@
 // gx, gy, s -> nms (1 = survivor, 0 otherwise; column-packed, common.wgsl pk_word). A column pass, all levels in
 // one dispatch (over the tile list).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/nms.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: no atomics. Each invocation owns one column of one tile and stores only
+// that column's 4 words of `nms` (common.wgsl pk_word), so no two invocations
+// write one word.
 
 @group(0) @binding(1) var<storage, read> gx: array<i32>;
 @group(0) @binding(2) var<storage, read> gy: array<i32>;

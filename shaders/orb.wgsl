@@ -10,6 +10,9 @@
 // so (little-endian) bit i of byte j is pair 8j + i and the buffer's bytes
 // are the [u8; 32] descriptors.
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/orb.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: no atomics. Invocation k of keypoint i's workgroup stores word
+// descriptors[8 i + k] only, so no two invocations write one word.
 
 const KEYPOINTS: u32 = 1u; // counter::KEYPOINTS
 const PI: f32 = 3.14159265358979323846;

@@ -10,6 +10,9 @@
 // the *unsmoothed* level; the angle is an f32 approximation (the host
 // recomputes it exactly from m10, m01).
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/orientation.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: invocation i stores keypoints[i] only (a whole keypoint, read and
+// written by the same invocation), so no two invocations write one word.
 
 const KEYPOINTS: u32 = 1u; // counter::KEYPOINTS
 const HALF_PATCH: i32 = 15;

@@ -16,6 +16,12 @@
 // n0 and s0 come from a workgroup prefix sum (Hillis-Steele over the 64
 // invocations' sums of four bins, 6 steps).
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/otsu.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: one workgroup per level; the workgroup arrays are written at index t
+// by invocation t only, with a barrier between every read of another lane's
+// entry and the next write (the scan reads t - off before the barrier and
+// writes t after it; the reduction writes t < stride from t + stride >= stride,
+// which no lane writes in that round); otsu[l] is stored by invocation 0 only.
 
 @group(0) @binding(1) var<storage, read> hist: array<u32>;
 @group(0) @binding(2) var<storage, read_write> otsu: array<u32>;

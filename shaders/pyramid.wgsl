@@ -4,6 +4,11 @@
 // given by the dynamic offset of `level_index` (record l at l * 256 bytes).
 // `gray` is column-packed (common.wgsl pk_word).
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/pyramid.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: no atomics. Invocation (id.x, wg.y) stores only the `gray` words of
+// level l's columns 4 id.x .. 4 id.x + 3 at rows 16 wg.y .. + 15: 4 whole words
+// per column (common.wgsl pk_word), disjoint across invocations; it reads level
+// l - 1 only, which this dispatch does not write.
 
 const COEF_BITS: u32 = 11u;
 const ONE: u32 = 2048u; // 1 << COEF_BITS

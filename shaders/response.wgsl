@@ -10,6 +10,11 @@
 // intermediate passed through `opaque`, so that no compiler can contract
 // a*b + c into an fma or reassociate (Rust does neither).
 // Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/response.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: no atomics. Invocation k stores resp at its candidate's atlas index
+// only; the candidate list holds each pixel at most once (lfast.wgsl appends a
+// pixel once, from its one edge-list entry), so no two invocations write one
+// word.
 
 @group(0) @binding(1) var<storage, read> cand_list: array<u32>;
 @group(0) @binding(2) var<storage, read> counters: array<u32>;

@@ -9,6 +9,12 @@
 // all levels in one dispatch (over the tile list). Both rules read the classes
 // of SPEC 6 only, so the result does not depend on the order of invocations.
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/rules.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+//
+// Races: each invocation stores the `ruled` words of its own four columns of its
+// tile (one word per column per tile, pack_ruled), quads disjoint; walk-list
+// entries go into the range its workgroup reserved (one atomicAdd on
+// counters[WALKS] by lane 0, each lane's offset from an atomicAdd on the
+// workgroup's count, wg_base read after a barrier).
 
 @group(0) @binding(1) var<storage, read> classes: array<u32>;
 @group(0) @binding(2) var<storage, read_write> ruled: array<u32>;

@@ -5,43 +5,62 @@
 // level, y, x ascending.
 //
 // Entry points, in recording order:
-// - args (1 invocation): indirect args over the corner list, resets TAKEN.
+// - args (1 invocation): indirect args over the corner list, resets TAKEN and
+//   the key range.
 // - rank_level (indirect, 64 per group): each corner counts the corners of its
 //   level that precede it; it is "taken" iff that count < quota(level) (a level
 //   keeps its best up to its quota). No cap (n_features = 0): all are taken.
-// - count (indirect): each corner adds itself to its bucket, the top
-//   BUCKET_BITS bits of its order key complemented (buckets ascend as keys
-//   descend, so every corner of a lower bucket precedes every corner of a
-//   higher one), and, when taken, to its bucket's taken count.
+//   Each corner writes its record (key, taken, position) to `ranks`, and the
+//   group folds its responses' magnitudes into the frame's range (counters
+//   MAG_MAX, MAG_MIN).
+// - count (indirect): each corner adds itself to its bucket and, when taken,
+//   to its bucket's taken count. bucket_of spreads the magnitudes that occur
+//   (both signs: Harris responses of L-FAST corners are about half negative,
+//   from ~1e-12 to ~1e-2 either side) over the BUCKETS buckets, positives
+//   first, larger magnitudes first, then negatives, smaller first: buckets
+//   ascend as keys descend, so every corner of a lower bucket precedes every
+//   corner of a higher one. (The top 12 bits of the order key, sign and
+//   exponent, gave 8 buckets an octave, and the key range between a frame's
+//   extreme keys still holds every exponent between ~1e-2 and 0 either side.)
 // - scan (one workgroup): exclusive prefix sums of both counts over the buckets.
-// - scatter (indirect): each corner claims a slot of its bucket's range of
-//   `members` (in any order).
+// - scatter (indirect): each corner copies its record into a slot of its
+//   bucket's range of `members` (in any order).
 // - place (indirect): each corner counts the taken (T) and not taken (U)
 //   corners that precede it: those of lower buckets from the prefix sums, those
-//   of its own bucket by comparing with the bucket's members. The not-taken
+//   of its own bucket by comparing with the bucket's members (one contiguous
+//   record each: key, taken and position, no indirection). The not-taken
 //   corners that fill the spare quota are the first `spare` of them in order,
 //   so a corner is selected iff it is taken or U < spare, and its output index
 //   is T + min(U, spare).
 // - finish (1 invocation): the final count, indirect args (64 keypoints per
 //   group, and one keypoint per group) and draw args.
 // rank_level is O(n^2) over the corner list (tiled through workgroup memory)
-// and runs only under a cap; place is O(n * bucket size): Harris responses
-// spread over many octaves, and a bucket is 1/8 of an octave wide. Positions
-// are unique, so the order is total and the output deterministic.
+// only under a cap; place is O(n * bucket size), and the buckets split the
+// magnitudes' actual range 4096 ways. Positions are unique, so the order is total
+// and the output deterministic.
+//
+// Races: every plain (non-atomic) store goes to a word only one invocation
+// owns: ranks[i] by corner i; members[slot] by the corner whose atomicAdd on
+// its bucket's cursor returned that slot; keypoints[at] by the corner whose
+// rank is `at` (ranks are distinct, the order being total); indirect and the
+// counters' stores by the single invocation of args / finish; scan_sums[li]
+// and each bucket's prefix words by lane li of the one scan workgroup, between
+// barriers; tile_* [li] by lane li between barriers; wg_n, wg_max, wg_min by
+// lane 0 (or through atomics).
 // Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/select.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> corners: array<Kp>;
 @group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;
-// Per corner: order key, taken (0/1), preceding corners of its level, 0.
+// Per corner its record: order key, taken (0/1), level, y << 16 | x.
 @group(0) @binding(3) var<storage, read_write> ranks: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read_write> keypoints: array<Kp>;
 @group(0) @binding(5) var<storage, read_write> indirect: array<u32>;
 // BUCKETS words each: count, taken, corners before the bucket, taken corners
 // before the bucket, slots claimed (cleared by the pass before it runs).
 @group(0) @binding(6) var<storage, read_write> buckets: array<atomic<u32>>;
-// The corners of each bucket, bucket by bucket (its range starts at the
-// bucket's corners-before count).
-@group(0) @binding(7) var<storage, read_write> members: array<u32>;
+// The records of each bucket's corners, bucket by bucket (its range starts at
+// the bucket's corners-before count).
+@group(0) @binding(7) var<storage, read_write> members: array<vec4<u32>>;
 
 // gpu::select::BUCKETS = 1 << BUCKET_BITS.
 const BUCKET_BITS: u32 = 12u;
@@ -56,6 +75,8 @@ const B_CURSOR: u32 = 4u * BUCKETS;
 const C_CORNERS: u32 = 0u;
 const C_KEYPOINTS: u32 = 1u;
 const C_TAKEN: u32 = 2u;
+const C_MAG_MAX: u32 = 6u;
+const C_MAG_MIN: u32 = 7u;
 // indirect::* in src/gpu/buffers.rs, in words.
 const I_CORNERS: u32 = 0u;
 const I_KEYPOINTS: u32 = 4u;
@@ -87,8 +108,30 @@ fn precedes(kj: u32, pj: vec3<u32>, ki: u32, pi: vec3<u32>) -> bool {
 
 fn pos_of(k: Kp) -> vec3<u32> { return vec3(k.level, k.py, k.px); }
 
-// The bucket of an order key: greater keys, lower buckets.
-fn bucket_of(key: u32) -> u32 { return (~key) >> (32u - BUCKET_BITS); }
+// The same order on records (key, taken, level, y << 16 | x; sides are at most
+// 16384, so y << 16 | x orders as (y, x)).
+fn record_precedes(j: vec4<u32>, i: vec4<u32>) -> bool {
+    if (j.x != i.x) { return j.x > i.x; }
+    if (j.z != i.z) { return j.z < i.z; }
+    return j.w < i.w;
+}
+
+// The magnitude bits of an order key's response (|r| as u32 order).
+fn key_magnitude(key: u32) -> u32 { return select(~key, key, (key >> 31u) == 1u) & 0x7fffffffu; }
+
+// The bucket of an order key, from its response's magnitude t above the
+// frame's smallest (span = largest - smallest): a positive response is at
+// span - t, a negative one at span + 1 + t, in 0 ..= 2 span + 1, shifted right
+// until that fits BUCKETS. Greater keys, lower (or equal) buckets.
+fn bucket_of(key: u32) -> u32 {
+    let lo = atomicLoad(&counters[C_MAG_MIN]);
+    let span = atomicLoad(&counters[C_MAG_MAX]) - lo;
+    let t = key_magnitude(key) - lo;
+    let at = select(span + 1u + t, span - t, (key >> 31u) == 1u);
+    let bits = 32u - countLeadingZeros(2u * span + 1u);
+    let shift = select(0u, bits - BUCKET_BITS, bits > BUCKET_BITS);
+    return at >> shift;
+}
 
 // Quota left for the best not-taken corners of any level.
 fn spare() -> u32 {
@@ -107,11 +150,15 @@ fn args() {
     write_dispatch(I_CORNERS, corner_count());
     atomicStore(&counters[C_TAKEN], 0u);
     atomicStore(&counters[C_KEYPOINTS], 0u);
+    atomicStore(&counters[C_MAG_MAX], 0u);
+    atomicStore(&counters[C_MAG_MIN], 0xffffffffu);
 }
 
 var<workgroup> tile_key: array<u32, GROUP>;
 var<workgroup> tile_pos: array<vec3<u32>, GROUP>;
 var<workgroup> wg_n: u32;
+var<workgroup> wg_max: atomic<u32>;
+var<workgroup> wg_min: atomic<u32>;
 
 // The corner count as a workgroup-uniform value (the loop below has barriers).
 fn uniform_count(li: u32) -> u32 {
@@ -121,6 +168,10 @@ fn uniform_count(li: u32) -> u32 {
 
 @compute @workgroup_size(64)
 fn rank_level(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    if (li == 0u) {
+        atomicStore(&wg_max, 0u);
+        atomicStore(&wg_min, 0xffffffffu);
+    }
     let n = uniform_count(li);
     let i = gid.x;
     let live = i < n;
@@ -129,6 +180,8 @@ fn rank_level(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invo
     if (live) {
         ki = order_key(corners[i].response);
         pi = pos_of(corners[i]);
+        atomicMax(&wg_max, key_magnitude(ki));
+        atomicMin(&wg_min, key_magnitude(ki));
     }
     // Without a cap every corner is taken: no need to count.
     let m = select(n, 0u, P.n_features == 0u);
@@ -148,9 +201,14 @@ fn rank_level(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invo
         }
         workgroupBarrier();
     }
+    workgroupBarrier();
+    if (li == 0u && atomicLoad(&wg_max) >= atomicLoad(&wg_min)) {
+        atomicMax(&counters[C_MAG_MAX], atomicLoad(&wg_max));
+        atomicMin(&counters[C_MAG_MIN], atomicLoad(&wg_min));
+    }
     if (live) {
         let taken = P.n_features == 0u || before < quota(pi.x);
-        ranks[i] = vec4(ki, u32(taken), before, 0u);
+        ranks[i] = vec4(ki, u32(taken), pi.x, (pi.y << 16u) | pi.z);
         if (taken) { atomicAdd(&counters[C_TAKEN], 1u); }
     }
 }
@@ -200,9 +258,10 @@ fn scan(@builtin(local_invocation_index) li: u32) {
 fn scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if (i >= corner_count()) { return; }
-    let b = bucket_of(ranks[i].x);
+    let r = ranks[i];
+    let b = bucket_of(r.x);
     let slot = atomicLoad(&buckets[B_BEFORE + b]) + atomicAdd(&buckets[B_CURSOR + b], 1u);
-    members[slot] = i;
+    members[slot] = r;
 }
 
 @compute @workgroup_size(64)
@@ -210,18 +269,16 @@ fn place(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if (i >= corner_count()) { return; }
     let ri = ranks[i];
-    let ki = ri.x;
-    let pi = pos_of(corners[i]);
-    let b = bucket_of(ki);
+    let b = bucket_of(ri.x);
     let start = atomicLoad(&buckets[B_BEFORE + b]);
     let end = start + atomicLoad(&buckets[B_COUNT + b]);
     // every corner of a lower bucket precedes this one
     var taken_before = atomicLoad(&buckets[B_TAKEN_BEFORE + b]);
     var rest_before = start - taken_before;
+    // (a corner does not precede itself)
     for (var k = start; k < end; k++) {
-        let j = members[k];
-        let rj = ranks[j];
-        if (j != i && precedes(rj.x, pos_of(corners[j]), ki, pi)) {
+        let rj = members[k];
+        if (record_precedes(rj, ri)) {
             if (rj.y == 1u) { taken_before++; } else { rest_before++; }
         }
     }

@@ -658,10 +658,9 @@ fn run_front(ctx: &GpuContext, b: &Buffers) {
 #[test]
 fn chained_front_matches_cpu_on_real_images() {
     let Some(ctx) = t::context() else { return };
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/");
-    let coins = lfast::image::load_gray(format!("{dir}coins.png")).unwrap();
-    let camera = lfast::image::load_gray(format!("{dir}camera_cc0_v0.18plus.png")).unwrap();
-    let chess = lfast::image::load_gray(format!("{dir}chessboard_GRAY.png")).unwrap();
+    let coins = lfast::image::load_gray(common::data("coins.png")).unwrap();
+    let camera = lfast::image::load_gray(common::data("camera_cc0_v0.18plus.png")).unwrap();
+    let chess = lfast::image::load_gray(common::data("chessboard_GRAY.png")).unwrap();
     let imgs = [
         ("coins crop", crop(&coins, 120, 80, 190, 150)),
         ("camera crop", crop(&camera, 150, 60, 161, 133)),

@@ -230,9 +230,9 @@ fn frames_with_more_keypoints_than_the_readback_hint_are_complete() {
     let gpu = GpuDetector::with_options(ctx.clone(), cfg.clone(), opts).unwrap();
     let cpu = CpuDetector::new(cfg).unwrap();
     let frames: Vec<Plane<u8>> = golden_images().into_iter().take(3).map(|(_, p)| p).collect();
-    let mut ws = None;
     for f in &frames {
-        let g = gpu.detect_and_compute(&mut ws, f.view(), None).unwrap();
+        // a new workspace copies the hint's 16 keypoints first
+        let g = gpu.detect_and_compute(&mut None, f.view(), None).unwrap();
         let c = cpu.detect_and_compute(f.view(), None).unwrap();
         assert!(c.0.len() > 16, "the test needs frames over the hint");
         assert_same("hint 16, blocking", &g, &c);
@@ -254,6 +254,30 @@ fn frames_with_more_keypoints_than_the_readback_hint_are_complete() {
     let c = cpu.detect_and_compute(frames[0].view(), None).unwrap();
     for tk in tickets {
         assert_same("hint 16, in flight", &gpu.finish_readback(&mut ws, tk).unwrap(), &c);
+    }
+}
+
+#[test]
+fn readback_copies_follow_the_counts_and_stay_complete() {
+    // Each copy is sized from the counts before it: a blank frame shrinks the
+    // next copy below a rich frame's count (completed from the spill), which
+    // then grows the copies; every frame stays whole through the changes.
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config::default();
+    let opts = GpuDetectorOptions { ring: 1, readback_hint: 16, ..Default::default() };
+    let gpu = GpuDetector::with_options(ctx, cfg.clone(), opts).unwrap();
+    let cpu = CpuDetector::new(cfg).unwrap();
+    let rich = golden_images().into_iter().map(|(_, p)| p).max_by_key(|p| p.width as u64 * p.height as u64).unwrap();
+    let blank = Plane::<u8>::new(rich.width, rich.height);
+    let n_rich = cpu.detect_and_compute(rich.view(), None).unwrap().0.len();
+    assert!(n_rich > 256, "the test needs a frame over the smallest copy (256), not {n_rich}");
+    let order = [&rich, &blank, &rich, &blank, &blank, &blank, &blank, &rich, &rich];
+    let mut ws = None;
+    for (i, f) in order.into_iter().enumerate() {
+        let g = gpu.detect_and_compute(&mut ws, f.view(), None).unwrap();
+        let c = cpu.detect_and_compute(f.view(), None).unwrap();
+        assert_same(&format!("frame {i} of the sequence"), &g, &c);
+        assert_eq!(g.count as usize, c.0.len());
     }
 }
 

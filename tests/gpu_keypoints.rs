@@ -22,7 +22,7 @@ const IMAGES: [&str; 5] =
     ["astronaut_256.png", "camera_cc0_v0.18plus.png", "chessboard_GRAY.png", "coins.png", "text.png"];
 
 fn data(name: &str) -> Plane<u8> {
-    load_gray(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)).unwrap()
+    load_gray(common::data(name)).unwrap()
 }
 
 /// A candidate map (1 = candidate) of a level from a list of positions.
@@ -401,9 +401,10 @@ fn select_matches_cpu_on_random_corners() {
     }
 }
 
-/// Every corner in one bucket of select's key buckets (responses within a
-/// few ulps of 1.0, many equal): place compares within the bucket only, so
-/// this is its worst case, and the ties go by position.
+/// Many corners per bucket of select's key buckets: responses within a few
+/// ulps of 1.0, ~500 corners on each value, so even buckets as narrow as one
+/// value hold hundreds; place compares within the bucket only, so this is
+/// its worst case, and the ties go by position.
 #[test]
 fn select_with_every_corner_in_one_bucket() {
     let Some(ctx) = t::context() else { return };

@@ -107,8 +107,12 @@ fn empty_sets_and_bad_options() {
 fn real_descriptors_of_two_views_match_identically() {
     let Some(ctx) = t::context() else { return };
     let m = GpuMatcher::new(ctx).unwrap();
-    let img =
-        lfast::image::load_gray(env!("CARGO_MANIFEST_DIR").to_string() + "/tests/data/astronaut_256.png").unwrap();
+    let img = lfast::image::load_gray(
+        std::env::var_os("LFAST_ROOT")
+            .map_or_else(|| std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")), std::path::PathBuf::from)
+            .join("tests/data/astronaut_256.png"),
+    )
+    .unwrap();
     // second view: the image shifted by (3, 2) pixels
     let mut shifted = lfast::Plane::<u8>::new(img.width, img.height);
     for y in 0..img.height {

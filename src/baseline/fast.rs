@@ -29,23 +29,10 @@ use crate::cpu::fused::for_each_nonzero;
 use crate::{KeyPoint, Plane};
 
 /// The Bresenham circle of radius 3 as `(dx, dy)`, in OpenCV's `offsets16` order.
+#[rustfmt::skip]
 const OFFSETS: [(isize, isize); 16] = [
-    (0, 3),
-    (1, 3),
-    (2, 2),
-    (3, 1),
-    (3, 0),
-    (3, -1),
-    (2, -2),
-    (1, -3),
-    (0, -3),
-    (-1, -3),
-    (-2, -2),
-    (-3, -1),
-    (-3, 0),
-    (-3, 1),
-    (-2, 2),
-    (-1, 3),
+    (0, 3), (1, 3), (2, 2), (3, 1), (3, 0), (3, -1), (2, -2), (1, -3),
+    (0, -3), (-1, -3), (-2, -2), (-3, -1), (-3, 0), (-3, 1), (-2, 2), (-1, 3),
 ];
 
 /// Half the pattern: a corner needs `K + 1 = 9` contiguous circle pixels.

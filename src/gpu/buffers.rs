@@ -48,6 +48,11 @@ pub const KP_WORDS: u64 = 12;
 /// u32 words per descriptor.
 pub const DESC_WORDS: u64 = 8;
 
+/// Buckets of select's order keys (`BUCKETS` in shaders/select.wgsl).
+pub const SELECT_BUCKETS: u64 = 4096;
+/// Words of [`Buffers::sel_buckets`]: five per bucket.
+pub const SELECT_BUCKET_WORDS: u64 = 5 * SELECT_BUCKETS;
+
 /// Offsets in [`Buffers::indirect`]: dispatch args over the corner list,
 /// over the final keypoints, and `draw` args (4 vertices per keypoint instance).
 pub mod indirect {
@@ -88,6 +93,10 @@ pub mod counter {
     pub const EDGES: usize = 4;
     /// Entries of the walk list (`walks`, appended by rules).
     pub const WALKS: usize = 5;
+    /// The largest response magnitude (`|r|` as bits) of the frame's corners (select).
+    pub const MAG_MAX: usize = 6;
+    /// The smallest response magnitude of the frame's corners (select).
+    pub const MAG_MIN: usize = 7;
     /// Words in the buffer.
     pub const LEN: usize = 8;
 }
@@ -234,11 +243,11 @@ pub struct Buffers {
     pub resp: wgpu::Buffer,
     /// Corners surviving corner NMS, unordered ([`GpuKeypoint`]s).
     pub corners: wgpu::Buffer,
-    /// Per corner scratch for select (4 words each).
+    /// Per corner its select record: order key, taken, level, `y << 16 | x`.
     pub ranks: wgpu::Buffer,
-    /// select's bucket counts, prefix sums and cursors (`select::BUCKET_WORDS`).
+    /// select's bucket counts, prefix sums and cursors ([`SELECT_BUCKET_WORDS`]).
     pub sel_buckets: wgpu::Buffer,
-    /// select's corners grouped by bucket, one index per keypoint slot.
+    /// select's corner records grouped by bucket (4 words per keypoint slot).
     pub sel_members: wgpu::Buffer,
     /// The final keypoints in SPEC 9 order.
     pub keypoints: wgpu::Buffer,
@@ -392,8 +401,8 @@ impl Buffers {
             resp: px("resp"),
             corners: buf("corners", cap * KP_WORDS * 4),
             ranks: buf("ranks", cap * 16),
-            sel_buckets: buf("sel_buckets", super::select::BUCKET_WORDS * 4),
-            sel_members: buf("sel_members", cap * 4),
+            sel_buckets: buf("sel_buckets", SELECT_BUCKET_WORDS * 4),
+            sel_members: buf("sel_members", cap * 16),
             keypoints: buf("keypoints", cap * KP_WORDS * 4),
             descriptors: buf("descriptors", cap * DESC_WORDS * 4),
             counters: buf("counters", counter::LEN as u64 * 4),

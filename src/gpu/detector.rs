@@ -7,17 +7,16 @@
 //! The embedding API ([`GpuDetector::encode`], [`GpuDetector::encode_readback`])
 //! only records commands: it never submits and never polls.
 
-use super::buffers::{Buffers, DESC_WORDS, GpuKeypoint, KP_WORDS};
+use super::buffers::Buffers;
 use super::context::{GpuContext, map_blocking};
-use super::readback::Slot;
-pub use super::readback::{Frame, Ticket};
+use super::readback::Ring;
+pub use super::readback::{Frame, Ticket, to_keypoint};
 pub use super::stages::STAGES;
 use super::stages::{Bound, Passes, Timestamps};
 use crate::config::Config;
 use crate::error::{Error, Result};
 use crate::image::{GrayView, Plane};
-use crate::keypoint::KeyPoint;
-use crate::spec::{self, angle, level_mask};
+use crate::spec::{self, level_mask};
 
 /// Where a frame comes from.
 #[derive(Clone, Copy, Debug)]
@@ -39,9 +38,8 @@ pub struct GpuWorkspace {
     pub buffers: Buffers,
     bound: Bound,
     textures: Option<(wgpu::TextureView, wgpu::TextureFormat, wgpu::BindGroup)>,
-    pub(super) ring: Vec<Slot>,
-    pub(super) next: usize,
-    pub(super) timestamps: Option<Timestamps>,
+    ring: Ring,
+    timestamps: Option<Timestamps>,
 }
 
 impl std::fmt::Debug for GpuWorkspace {
@@ -85,10 +83,12 @@ pub struct GpuDetectorOptions {
     pub ring: usize,
     /// Record per-pass timestamps when the adapter supports them.
     pub profile: bool,
-    /// Keypoints copied to host-visible memory per frame, before the count is
-    /// known (the copy's size is fixed when it is recorded). A frame with more
-    /// is completed from a device-side copy with one more, blocking, transfer.
-    /// Smaller is less PCIe traffic per frame; 0 = the whole capacity.
+    /// Keypoints the first frame of a workspace copies to host-visible memory
+    /// (the copy's size is fixed when it is recorded, before the count is
+    /// known); later frames copy a little more than the recent counts
+    /// ([`readback`](super::readback)). A frame with more is completed from
+    /// a device-side copy with one more, blocking, transfer. 0 = always the
+    /// whole capacity.
     pub readback_hint: u32,
 }
 
@@ -105,9 +105,9 @@ impl Default for GpuDetectorOptions {
 /// Keypoints and descriptors equal [`CpuDetector`](crate::cpu::CpuDetector)'s
 /// (see docs/algorithm.md for the one exception, `orientation_bins = 0`).
 pub struct GpuDetector {
-    pub(super) ctx: GpuContext,
-    pub(super) cfg: Config,
-    pub(super) opts: GpuDetectorOptions,
+    ctx: GpuContext,
+    cfg: Config,
+    opts: GpuDetectorOptions,
     passes: Passes,
     mask_radius: u32,
 }
@@ -116,13 +116,6 @@ impl std::fmt::Debug for GpuDetector {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("GpuDetector").field("adapter", &self.ctx.info.name).field("cfg", &self.cfg).finish()
     }
-}
-
-/// Converts a GPU keypoint as the CPU path builds its [`KeyPoint`]
-/// ([`spec::keypoint_at`] from the level pixel, exact angle from the integer moments).
-pub fn to_keypoint(cfg: &Config, k: &GpuKeypoint) -> KeyPoint {
-    let s = cfg.level_scale(k.level);
-    spec::keypoint_at(k.level, k.px, k.py, s, spec::LFAST_CENTRE, angle::angle_deg(k.m10, k.m01), k.response)
 }
 
 impl GpuDetector {
@@ -186,8 +179,7 @@ impl GpuDetector {
         let oom = d.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let val = d.push_error_scope(wgpu::ErrorFilter::Validation);
         let built = Buffers::new(d, &self.cfg, width, height).and_then(|buffers| {
-            let spill = self.frame_slots(&buffers) * (KP_WORDS + DESC_WORDS) * 4;
-            let staging = self.staging_size(&buffers).max(spill);
+            let staging = super::readback::largest_buffer(&self.cfg, &buffers);
             if staging > d.limits().max_buffer_size {
                 return Err(Error::GpuLimits {
                     reason: format!(
@@ -197,7 +189,7 @@ impl GpuDetector {
                 });
             }
             let bound = self.passes.bind(d, &buffers)?;
-            let ring: Vec<Slot> = (0..self.opts.ring).map(|_| self.slot(&buffers)).collect();
+            let ring = Ring::new(d, &self.cfg, &buffers, self.opts.ring, self.opts.readback_hint);
             Ok((buffers, bound, ring))
         });
         let val_err = pollster::block_on(val.pop());
@@ -210,7 +202,7 @@ impl GpuDetector {
         }
         let (buffers, bound, ring) = built?;
         let timestamps = (self.opts.profile && self.ctx.has_timestamps()).then(|| Timestamps::new(d));
-        Ok(GpuWorkspace { buffers, bound, textures: None, ring, next: 0, timestamps })
+        Ok(GpuWorkspace { buffers, bound, textures: None, ring, timestamps })
     }
 
     /// Makes `ws` fit `width x height`: kept when it already has that size,
@@ -369,6 +361,36 @@ impl GpuDetector {
     /// stage-by-stage comparisons).
     pub fn read_buffer(&self, buf: &wgpu::Buffer) -> Result<Vec<u8>> {
         self.ctx.read_buffer(buf)
+    }
+
+    /// Records the copy of this frame's outputs into the next free staging
+    /// buffer of the ring and returns its ticket; `Err` when all are in flight.
+    /// After submitting, call [`start_readback`](Self::start_readback).
+    pub fn encode_readback(&self, enc: &mut wgpu::CommandEncoder, ws: &mut GpuWorkspace) -> Result<Ticket> {
+        ws.ring.encode(&self.ctx.device, enc, &ws.buffers, ws.timestamps.as_ref())
+    }
+
+    /// Starts mapping a recorded slot (call after the submit that carries it).
+    pub fn start_readback(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<()> {
+        ws.ring.start(t)
+    }
+
+    /// The frame's keypoints and descriptors if its staging buffer is mapped
+    /// (someone must poll the device: [`finish_readback`](Self::finish_readback)
+    /// does, or the caller's own `device.poll`), else `None`.
+    pub fn try_finish_readback(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<Option<Frame>> {
+        self.ctx.check_lost()?;
+        ws.ring.try_finish(&self.ctx, &self.cfg, t)
+    }
+
+    /// Waits for a frame's readback and returns it.
+    pub fn finish_readback(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<Frame> {
+        loop {
+            if let Some(f) = self.try_finish_readback(ws, t)? {
+                return Ok(f);
+            }
+            self.ctx.wait()?;
+        }
     }
 
     /// The blocking map used by tests.

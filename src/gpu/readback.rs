@@ -1,129 +1,214 @@
-//! The readback ring: staging buffers a frame's keypoints, descriptors and
-//! timestamps are copied into, mapped while the next frame runs, and parsed
-//! into a [`Frame`]. [`GpuDetector::encode_readback`] records the copy,
-//! [`GpuDetector::start_readback`] maps after the submit, and
-//! [`GpuDetector::try_finish_readback`] / [`GpuDetector::finish_readback`] parse.
+//! The readback ring: staging buffers a frame's count, keypoints, descriptors
+//! and timestamps are copied into, mapped while the next frame runs, and
+//! turned into a [`Frame`]. [`GpuDetector`](super::GpuDetector)'s
+//! `encode_readback`, `start_readback`, `try_finish_readback` and
+//! `finish_readback` drive a workspace's [`Ring`].
+//!
+//! What a frame costs the host, once its staging buffer is mapped: the count
+//! from the first word, then the used part only (`count` keypoints and
+//! descriptors) cast with bytemuck from the mapped range and copied once,
+//! and the exact angle of each keypoint ([`to_keypoint`]). The copy on the
+//! GPU is sized from the counts of the frames before (the count itself is
+//! known only once the frame has run): the largest of the last few, plus an
+//! eighth and 64, and each staging buffer grows to fit that, so a sequence
+//! settles on copying little more than it uses. A frame with more keypoints
+//! than were copied is completed from a device-side copy of the whole list
+//! (the spill) with one more, blocking, transfer.
 
 use super::buffers::{Buffers, DESC_WORDS, GpuKeypoint, KP_WORDS, counter};
-use super::detector::{GpuDetector, GpuWorkspace, to_keypoint};
+use super::context::GpuContext;
 use super::stages::{STAGES, Timestamps};
 use crate::config::Config;
 use crate::error::{Error, Result};
 use crate::keypoint::{Descriptor, KeyPoint};
+use crate::spec::{self, angle};
 
-/// State of one staging buffer of the readback ring.
+/// Bytes before the keypoints in a staging buffer: the first four counters.
+const HEADER: u64 = 16;
+/// Bytes of one keypoint and its descriptor.
+const SLOT_BYTES: u64 = (KP_WORDS + DESC_WORDS) * 4;
+/// Copies are sized in whole multiples of this many keypoints.
+const COPY_STEP: u64 = 256;
+/// Frames whose counts size the next copy.
+const HISTORY: usize = 4;
+
+/// Converts a GPU keypoint as the CPU path builds its [`KeyPoint`]
+/// ([`spec::keypoint_at`] from the level pixel, exact angle from the integer moments).
+pub fn to_keypoint(cfg: &Config, k: &GpuKeypoint) -> KeyPoint {
+    to_keypoint_at(k, cfg.level_scale(k.level))
+}
+
+/// [`to_keypoint`] with the level's scale already known.
+fn to_keypoint_at(k: &GpuKeypoint, s: f64) -> KeyPoint {
+    spec::keypoint_at(k.level, k.px, k.py, s, spec::LFAST_CENTRE, angle::angle_deg(k.m10, k.m01), k.response)
+}
+
+/// State of one staging buffer of the ring.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum SlotState {
+enum SlotState {
     Free,
-    /// A copy was recorded; the caller must submit, then call `start_readback`.
+    /// A copy was recorded; the caller must submit, then start the readback.
     Recorded,
     /// `map_async` was called.
     Mapping,
 }
 
-pub(super) struct Slot {
+type MapResult = std::sync::Arc<std::sync::Mutex<Option<std::result::Result<(), wgpu::BufferAsyncError>>>>;
+
+struct Slot {
     staging: wgpu::Buffer,
+    /// Keypoints the staging buffer can receive.
+    held: u64,
     state: SlotState,
-    mapped: std::sync::Arc<std::sync::Mutex<Option<std::result::Result<(), wgpu::BufferAsyncError>>>>,
-    /// Keypoint slots copied into this staging buffer.
+    mapped: MapResult,
+    /// Keypoints copied by the frame recorded last.
     copied: u64,
-    /// All keypoint slots and descriptors of the frame, copied on the GPU
-    /// (cheap, device-local) when the staging buffer holds fewer: the rest
-    /// of a frame with more keypoints than the hint is read from here.
-    spill: Option<wgpu::Buffer>,
+    /// Whether that frame copied its timestamps.
+    profiled: bool,
     /// Frames recorded into this slot so far: a ticket names slot and generation.
     generation: u64,
 }
 
 /// A frame recorded into a staging slot; redeem it with
-/// [`GpuDetector::start_readback`] after submitting, then `try_finish` / `finish_readback`.
+/// [`GpuDetector::start_readback`](super::GpuDetector::start_readback) after
+/// submitting, then `try_finish_readback` / `finish_readback`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Ticket {
     slot: usize,
     generation: u64,
 }
 
-impl GpuDetector {
-    /// Keypoint slots a frame can fill: the capacity, or the cap when there is one.
-    pub(super) fn frame_slots(&self, b: &Buffers) -> u64 {
-        let cap = b.allocated.keypoints;
-        if self.cfg.n_features > 0 { cap.min(self.cfg.n_features as u64) } else { cap }
-    }
+/// A workspace's staging buffers and what sizes their copies.
+pub(super) struct Ring {
+    slots: Vec<Slot>,
+    next: usize,
+    /// Keypoints a frame can have: the capacity, or the cap when there is one.
+    frame_slots: u64,
+    /// All keypoints and descriptors of the frame, copied on the GPU (cheap,
+    /// device-local) when a copy may hold fewer than `frame_slots`.
+    spill: Option<wgpu::Buffer>,
+    /// Counts of the last frames read back, newest last.
+    recent: std::collections::VecDeque<u64>,
+    /// The copy before any frame was read back (0 = all slots).
+    hint: u64,
+}
 
-    /// Keypoint slots the staging buffer receives (at most the hint).
-    fn readback_slots(&self, b: &Buffers) -> u64 {
-        let all = self.frame_slots(b);
-        match self.opts.readback_hint {
-            0 => all,
-            h => all.min(h as u64),
-        }
-    }
+/// Bytes of a staging buffer for `n` keypoints (timestamps after them).
+fn staging_bytes(n: u64) -> u64 {
+    HEADER + n * SLOT_BYTES + 16 * STAGES.len() as u64
+}
 
-    pub(super) fn staging_size(&self, b: &Buffers) -> u64 {
-        let n = self.readback_slots(b);
-        16 + n * KP_WORDS * 4 + n * DESC_WORDS * 4 + 16 * STAGES.len() as u64
-    }
+/// Keypoint slots a frame of `b` can fill under `cfg`: the capacity, or the cap.
+pub(super) fn frame_slots(cfg: &Config, b: &Buffers) -> u64 {
+    let cap = b.allocated.keypoints;
+    if cfg.n_features > 0 { cap.min(cfg.n_features as u64) } else { cap }
+}
 
-    pub(super) fn slot(&self, b: &Buffers) -> Slot {
-        Slot {
-            staging: self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("lfast readback"),
-                size: self.staging_size(b),
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+/// The largest staging or spill buffer a ring for `b` may allocate.
+pub(super) fn largest_buffer(cfg: &Config, b: &Buffers) -> u64 {
+    staging_bytes(frame_slots(cfg, b))
+}
+
+impl Ring {
+    /// `len` staging buffers, each first sized for `hint` keypoints (0 = all).
+    pub(super) fn new(device: &wgpu::Device, cfg: &Config, b: &Buffers, len: usize, hint: u32) -> Self {
+        let frame_slots = frame_slots(cfg, b);
+        let hint = hint as u64;
+        let first = if hint == 0 { frame_slots } else { hint.min(frame_slots) };
+        let spill = (first < frame_slots).then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("lfast readback spill"),
+                size: frame_slots * SLOT_BYTES,
+                usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
-            }),
-            state: SlotState::Free,
-            mapped: Default::default(),
-            copied: 0,
-            spill: (self.readback_slots(b) < self.frame_slots(b)).then(|| {
-                let n = self.frame_slots(b);
-                self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("lfast readback spill"),
-                    size: n * (KP_WORDS + DESC_WORDS) * 4,
-                    usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                })
-            }),
-            generation: 0,
+            })
+        });
+        let slots = (0..len)
+            .map(|_| Slot {
+                staging: staging(device, first),
+                held: first,
+                state: SlotState::Free,
+                mapped: Default::default(),
+                copied: 0,
+                profiled: false,
+                generation: 0,
+            })
+            .collect();
+        Self { slots, next: 0, frame_slots, spill, recent: Default::default(), hint }
+    }
+
+    /// The number of staging buffers.
+    pub(super) fn len(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// Keypoints the next frame copies: every slot without a spill, else the
+    /// largest recent count plus an eighth and 64, in whole [`COPY_STEP`]s.
+    fn want(&self) -> u64 {
+        if self.spill.is_none() {
+            return self.frame_slots;
         }
+        let want = match self.recent.iter().max() {
+            None if self.hint == 0 => self.frame_slots,
+            None => self.hint,
+            Some(&m) => (m + m / 8 + 64).next_multiple_of(COPY_STEP),
+        };
+        want.min(self.frame_slots)
     }
 
     /// Records the copy of this frame's outputs into the next free staging
-    /// buffer of the ring and returns its ticket; `Err` when all are in flight.
-    /// After submitting, call [`start_readback`](Self::start_readback).
-    pub fn encode_readback(&self, enc: &mut wgpu::CommandEncoder, ws: &mut GpuWorkspace) -> Result<Ticket> {
-        let n = ws.ring.len();
-        let i = (0..n).map(|k| (ws.next + k) % n).find(|&i| ws.ring[i].state == SlotState::Free).ok_or_else(|| {
-            Error::Gpu { reason: format!("all {n} readback buffers are in flight; finish one first") }
-        })?;
-        ws.next = (i + 1) % n;
-        let b = &ws.buffers;
-        let slots = self.readback_slots(b);
-        let slot = &mut ws.ring[i];
-        let kp_bytes = slots * KP_WORDS * 4;
-        let desc_bytes = slots * DESC_WORDS * 4;
-        enc.copy_buffer_to_buffer(&b.counters, 0, &slot.staging, 0, 16);
-        enc.copy_buffer_to_buffer(&b.keypoints, 0, &slot.staging, 16, kp_bytes);
-        enc.copy_buffer_to_buffer(&b.descriptors, 0, &slot.staging, 16 + kp_bytes, desc_bytes);
-        if let Some(spill) = &slot.spill {
-            let all = self.frame_slots(b);
-            enc.copy_buffer_to_buffer(&b.keypoints, 0, spill, 0, all * KP_WORDS * 4);
-            enc.copy_buffer_to_buffer(&b.descriptors, 0, spill, all * KP_WORDS * 4, all * DESC_WORDS * 4);
+    /// buffer (grown first when the copy needs more) and returns its ticket.
+    pub(super) fn encode(
+        &mut self,
+        device: &wgpu::Device,
+        enc: &mut wgpu::CommandEncoder,
+        b: &Buffers,
+        ts: Option<&Timestamps>,
+    ) -> Result<Ticket> {
+        let n = self.slots.len();
+        let i =
+            (0..n).map(|k| (self.next + k) % n).find(|&i| self.slots[i].state == SlotState::Free).ok_or_else(|| {
+                Error::Gpu { reason: format!("all {n} readback buffers are in flight; finish one first") }
+            })?;
+        self.next = (i + 1) % n;
+        let want = self.want();
+        let frame_slots = self.frame_slots;
+        let slot = &mut self.slots[i];
+        if slot.held < want {
+            let held = want.next_power_of_two().min(frame_slots);
+            slot.staging = staging(device, held);
+            slot.held = held;
         }
-        if let Some(t) = &ws.timestamps {
-            let n = Timestamps::QUERIES;
-            enc.resolve_query_set(&t.set, 0..n, &t.resolve, 0);
-            enc.copy_buffer_to_buffer(&t.resolve, 0, &slot.staging, 16 + kp_bytes + desc_bytes, n as u64 * 8);
+        let kp_bytes = want * KP_WORDS * 4;
+        let desc_bytes = want * DESC_WORDS * 4;
+        enc.copy_buffer_to_buffer(&b.counters, 0, &slot.staging, 0, HEADER);
+        enc.copy_buffer_to_buffer(&b.keypoints, 0, &slot.staging, HEADER, kp_bytes);
+        enc.copy_buffer_to_buffer(&b.descriptors, 0, &slot.staging, HEADER + kp_bytes, desc_bytes);
+        if let Some(spill) = &self.spill {
+            enc.copy_buffer_to_buffer(&b.keypoints, 0, spill, 0, frame_slots * KP_WORDS * 4);
+            enc.copy_buffer_to_buffer(
+                &b.descriptors,
+                0,
+                spill,
+                frame_slots * KP_WORDS * 4,
+                frame_slots * DESC_WORDS * 4,
+            );
         }
-        slot.copied = slots;
+        if let Some(t) = ts {
+            let q = Timestamps::QUERIES;
+            enc.resolve_query_set(&t.set, 0..q, &t.resolve, 0);
+            enc.copy_buffer_to_buffer(&t.resolve, 0, &slot.staging, HEADER + kp_bytes + desc_bytes, q as u64 * 8);
+        }
+        slot.copied = want;
+        slot.profiled = ts.is_some();
         slot.state = SlotState::Recorded;
         slot.generation += 1;
         Ok(Ticket { slot: i, generation: slot.generation })
     }
 
-    /// Starts mapping a recorded slot (call after the submit that carries it).
-    pub fn start_readback(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<()> {
-        let slot = ticket_slot(ws, t)?;
+    /// Starts mapping a recorded slot (after the submit that carries its copy).
+    pub(super) fn start(&mut self, t: Ticket) -> Result<()> {
+        let slot = self.slot(t)?;
         if slot.state != SlotState::Recorded {
             return Err(Error::Gpu { reason: format!("readback slot {} is {:?}, not recorded", t.slot, slot.state) });
         }
@@ -131,7 +216,9 @@ impl GpuDetector {
         if let Ok(mut g) = flag.lock() {
             *g = None;
         }
-        slot.staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+        // only what the frame copied: the rest of the buffer may be larger
+        let end = staging_bytes(slot.copied).min(slot.staging.size());
+        slot.staging.slice(..end).map_async(wgpu::MapMode::Read, move |r| {
             if let Ok(mut g) = flag.lock() {
                 *g = Some(r);
             }
@@ -140,13 +227,10 @@ impl GpuDetector {
         Ok(())
     }
 
-    /// The frame's keypoints and descriptors if its staging buffer is mapped
-    /// (someone must poll the device: [`finish_readback`](Self::finish_readback)
-    /// does, or the caller's own `device.poll`), else `None`.
-    pub fn try_finish_readback(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<Option<Frame>> {
-        self.ctx.check_lost()?;
-        let profiled = ws.timestamps.is_some();
-        let slot = ticket_slot(ws, t)?;
+    /// The frame if its staging buffer is mapped (someone must poll the
+    /// device), else `None`.
+    pub(super) fn try_finish(&mut self, ctx: &GpuContext, cfg: &Config, t: Ticket) -> Result<Option<Frame>> {
+        let slot = self.slot(t)?;
         if slot.state != SlotState::Mapping {
             return Err(Error::Gpu { reason: format!("readback slot {} is {:?}, not mapping", t.slot, slot.state) });
         }
@@ -154,54 +238,68 @@ impl GpuDetector {
         let Some(res) = done else { return Ok(None) };
         slot.state = SlotState::Free;
         if let Err(e) = res {
-            self.ctx.check_lost_polled()?;
+            ctx.check_lost_polled()?;
             return Err(Error::Gpu { reason: format!("map_async: {e}") });
         }
+        let (copied, profiled) = (slot.copied, slot.profiled);
+        let end = staging_bytes(copied).min(slot.staging.size());
         let frame = {
-            let view =
-                slot.staging.slice(..).get_mapped_range().map_err(|e| Error::Gpu { reason: format!("{e:?}") })?;
-            parse_frame(&self.cfg, &view, slot.copied, profiled, self.ctx.queue.get_timestamp_period())
+            let view = slot
+                .staging
+                .slice(..end)
+                .get_mapped_range()
+                .map_err(|e| Error::Gpu { reason: format!("mapped range: {e:?}") })?;
+            parse_frame(cfg, &view, copied, profiled, ctx.queue.get_timestamp_period())
         };
         slot.staging.unmap();
         let mut frame = frame?;
-        if frame.count > slot.copied {
-            // more keypoints than the hint: the rest from the device-side copy
-            let spill = slot.spill.as_ref().ok_or_else(|| Error::Gpu {
-                reason: format!("GPU reported {} keypoints, only {} slots exist", frame.count, slot.copied),
-            })?;
-            let all = spill.size() / ((KP_WORDS + DESC_WORDS) * 4);
-            let (from, to) = (slot.copied, frame.count.min(all));
-            let kps = self.ctx.read_range(spill, from * KP_WORDS * 4, (to - from) * KP_WORDS * 4)?;
-            let descs =
-                self.ctx.read_range(spill, all * KP_WORDS * 4 + from * DESC_WORDS * 4, (to - from) * DESC_WORDS * 4)?;
-            let raw: Vec<GpuKeypoint> = bytemuck::pod_collect_to_vec(&kps);
-            frame.keypoints.extend(raw.iter().map(|k| to_keypoint(&self.cfg, k)));
-            frame.raw.extend(raw);
-            frame.descriptors.extend(descs.chunks_exact(32).map(|c| c.try_into().unwrap_or([0; 32])));
+        self.recent.push_back(frame.count);
+        if self.recent.len() > HISTORY {
+            self.recent.pop_front();
+        }
+        if frame.count > copied {
+            self.complete(ctx, cfg, &mut frame, copied)?;
         }
         Ok(Some(frame))
     }
 
-    /// Waits for a frame's readback and returns it.
-    pub fn finish_readback(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<Frame> {
-        loop {
-            if let Some(f) = self.try_finish_readback(ws, t)? {
-                return Ok(f);
-            }
-            self.ctx.wait()?;
+    /// Reads keypoints `copied..count` from the spill (a frame with more
+    /// keypoints than its copy held).
+    fn complete(&self, ctx: &GpuContext, cfg: &Config, frame: &mut Frame, copied: u64) -> Result<()> {
+        let spill = self.spill.as_ref().ok_or_else(|| Error::Gpu {
+            reason: format!("GPU reported {} keypoints, only {copied} slots exist", frame.count),
+        })?;
+        let all = self.frame_slots;
+        let (from, to) = (copied, frame.count.min(all));
+        let kps = ctx.read_range(spill, from * KP_WORDS * 4, (to - from) * KP_WORDS * 4)?;
+        let descs = ctx.read_range(spill, all * KP_WORDS * 4 + from * DESC_WORDS * 4, (to - from) * DESC_WORDS * 4)?;
+        let raw: Vec<GpuKeypoint> = bytemuck::pod_collect_to_vec(&kps);
+        frame.keypoints.extend(raw.iter().map(|k| to_keypoint(cfg, k)));
+        frame.raw.extend(raw);
+        frame.descriptors.extend_from_slice(bytemuck::cast_slice::<u8, Descriptor>(&descs));
+        Ok(())
+    }
+
+    /// The slot a ticket names, if the ticket is current (not redeemed, not
+    /// from another frame).
+    fn slot(&mut self, t: Ticket) -> Result<&mut Slot> {
+        match self.slots.get_mut(t.slot) {
+            Some(s) if s.generation == t.generation => Ok(s),
+            Some(_) => Err(Error::Gpu {
+                reason: format!("stale readback ticket (slot {} was reused by a later frame)", t.slot),
+            }),
+            None => Err(Error::Gpu { reason: format!("unknown readback ticket (slot {})", t.slot) }),
         }
     }
 }
 
-/// The slot a ticket names, if the ticket is current (not redeemed, not from another frame).
-fn ticket_slot(ws: &mut GpuWorkspace, t: Ticket) -> Result<&mut Slot> {
-    match ws.ring.get_mut(t.slot) {
-        Some(s) if s.generation == t.generation => Ok(s),
-        Some(_) => {
-            Err(Error::Gpu { reason: format!("stale readback ticket (slot {} was reused by a later frame)", t.slot) })
-        }
-        None => Err(Error::Gpu { reason: format!("unknown readback ticket (slot {})", t.slot) }),
-    }
+fn staging(device: &wgpu::Device, n: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("lfast readback"),
+        size: staging_bytes(n),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// One frame's results, read back.
@@ -219,20 +317,42 @@ pub struct Frame {
     pub count: u64,
 }
 
+/// `n` values of `T` at `bytes[at..]`: cast in place when the mapped range is
+/// aligned for `T` (it is: mapped ranges are 8-aligned and every offset here
+/// is a multiple of 16), else read unaligned.
+fn pod_vec<T: bytemuck::Pod>(bytes: &[u8], at: usize, n: usize) -> Vec<T> {
+    let b = &bytes[at..at + n * std::mem::size_of::<T>()];
+    match bytemuck::try_cast_slice::<u8, T>(b) {
+        Ok(v) => v.to_vec(),
+        Err(_) => bytemuck::pod_collect_to_vec(b),
+    }
+}
+
+/// A mapped staging buffer (`slots` keypoints copied) as a [`Frame`].
 fn parse_frame(cfg: &Config, bytes: &[u8], slots: u64, ts: bool, period_ns: f32) -> Result<Frame> {
-    let word = |i: usize| u32::from_le_bytes([bytes[4 * i], bytes[4 * i + 1], bytes[4 * i + 2], bytes[4 * i + 3]]);
-    let count = word(counter::KEYPOINTS) as u64;
+    let short = || Error::Gpu { reason: format!("readback buffer of {} bytes is too short", bytes.len()) };
+    if (bytes.len() as u64) < HEADER + slots * SLOT_BYTES {
+        return Err(short());
+    }
+    let counters: [u32; 4] = pod_vec::<u32>(bytes, 0, 4).try_into().map_err(|_| short())?;
+    let count = counters[counter::KEYPOINTS] as u64;
     let n = count.min(slots) as usize;
-    let kp_off = 16;
+    let kp_off = HEADER as usize;
     let desc_off = kp_off + slots as usize * KP_WORDS as usize * 4;
-    let raw: Vec<GpuKeypoint> = bytemuck::pod_collect_to_vec(&bytes[kp_off..kp_off + n * KP_WORDS as usize * 4]);
-    let descriptors: Vec<Descriptor> =
-        bytes[desc_off..desc_off + n * 32].chunks_exact(32).map(|c| c.try_into().unwrap_or([0; 32])).collect();
-    let keypoints = raw.iter().map(|k| to_keypoint(cfg, k)).collect();
+    let raw: Vec<GpuKeypoint> = pod_vec(bytes, kp_off, n);
+    let descriptors: Vec<Descriptor> = pod_vec(bytes, desc_off, n);
+    let scales: Vec<f64> = (0..cfg.n_levels).map(|l| cfg.level_scale(l)).collect();
+    let keypoints = raw
+        .iter()
+        .map(|k| to_keypoint_at(k, scales.get(k.level as usize).copied().unwrap_or_else(|| cfg.level_scale(k.level))))
+        .collect();
     let mut pass_ms = Vec::new();
     if ts {
         let t_off = desc_off + slots as usize * DESC_WORDS as usize * 4;
-        let stamps: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes[t_off..t_off + 2 * STAGES.len() * 8]);
+        if bytes.len() < t_off + 2 * STAGES.len() * 8 {
+            return Err(short());
+        }
+        let stamps: Vec<u64> = pod_vec(bytes, t_off, 2 * STAGES.len());
         for (i, name) in STAGES.iter().enumerate() {
             let (a, b) = (stamps[2 * i], stamps[2 * i + 1]);
             pass_ms.push((*name, b.saturating_sub(a) as f64 * period_ns as f64 / 1e6));

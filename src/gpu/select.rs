@@ -24,10 +24,7 @@ pub const BINDINGS: &[Binding] = &[
     b(7, "members", Slot::ReadWrite),
 ];
 
-/// Buckets of the order keys (`BUCKETS` in shaders/select.wgsl).
-pub const BUCKETS: u64 = 4096;
-/// Words of [`Buffers::sel_buckets`]: five per bucket.
-pub const BUCKET_WORDS: u64 = 5 * BUCKETS;
+pub use super::buffers::{SELECT_BUCKET_WORDS as BUCKET_WORDS, SELECT_BUCKETS as BUCKETS};
 
 /// The bindings of the indirectly dispatched entry points: all but
 /// `indirect`, which those dispatches read their sizes from (a buffer may not

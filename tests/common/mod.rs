@@ -3,10 +3,17 @@
 
 use std::path::{Path, PathBuf};
 
+/// The project root: `LFAST_ROOT` when set (test executables carried to
+/// another machine, run from a copy of the repository there), else the
+/// directory this crate was built in.
+pub fn root() -> PathBuf {
+    std::env::var_os("LFAST_ROOT").map_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")), PathBuf::from)
+}
+
 /// `../shared/data/<rel>` if it exists. When it does not: in CI (env CI set)
 /// the test fails, elsewhere it prints why and the caller skips.
 pub fn shared(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(rel);
+    let p = root().join("../shared/data").join(rel);
     if p.exists() {
         return Some(p);
     }
@@ -19,7 +26,7 @@ pub fn shared(rel: &str) -> Option<PathBuf> {
 
 /// A file under tests/data.
 pub fn data(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
+    root().join("tests/data").join(rel)
 }
 
 /// The `lfast` binary with `args` and extra environment variables, not yet started.
