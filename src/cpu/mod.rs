@@ -17,6 +17,7 @@ pub mod local_threshold;
 pub mod matcher;
 pub mod median;
 pub mod nms;
+pub mod opencv;
 pub mod orb;
 pub mod orientation;
 pub mod otsu;
