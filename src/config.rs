@@ -25,6 +25,31 @@ impl std::str::FromStr for Mode {
     }
 }
 
+/// Which descriptor SPEC 11 computes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DescriptorKind {
+    /// lfast's rBRIEF: the level blurred by the SPEC 11 integer kernel,
+    /// the pattern rotated to `orientation_bins` (CPU == GPU).
+    #[default]
+    Lfast,
+    /// Bit for bit OpenCV 5 ORB `compute()` on the same keypoints
+    /// (its pyramid, its float blur, the keypoint's own angle); CPU only
+    /// (docs/algorithm.md).
+    Opencv,
+}
+
+impl std::str::FromStr for DescriptorKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "lfast" => Ok(DescriptorKind::Lfast),
+            "opencv" => Ok(DescriptorKind::Opencv),
+            _ => Err(format!("unknown descriptor `{s}` (expected lfast or opencv)")),
+        }
+    }
+}
+
 /// Every parameter of the pipeline. Build with `Config::default()` and struct
 /// update syntax, or read a TOML file with [`Config::load`]; [`Config::validate`]
 /// names the first bad field.
@@ -64,6 +89,8 @@ pub struct Config {
     pub distribution: bool,
     /// Orientation bins for the descriptor (0 = continuous angle as OpenCV), 0..=360.
     pub orientation_bins: u32,
+    /// The descriptor: `lfast` (default) or `opencv` (equal to cv2 ORB's).
+    pub descriptor: DescriptorKind,
 }
 
 /// Denominator of the rational `delta` (SPEC 1): `delta_num = round(delta * DELTA_DEN)`.
@@ -84,6 +111,7 @@ impl Default for Config {
             n_features: 0,
             distribution: false,
             orientation_bins: 30,
+            descriptor: DescriptorKind::Lfast,
         }
     }
 }

@@ -194,12 +194,35 @@ impl Detector {
         if image.width() == 0 || image.height() == 0 {
             return self.cpu.detect_and_compute(image, mask);
         }
+        if self.config().descriptor == crate::config::DescriptorKind::Opencv {
+            return self.opencv_descriptors(image, mask);
+        }
         #[cfg(feature = "gpu")]
         return self.run(
             |g, ws| g.detect_and_compute(ws, image, mask).map(|f| (f.keypoints, f.descriptors)),
             |c| c.detect_and_compute(image, mask),
         );
         #[cfg(not(feature = "gpu"))]
+        self.cpu.detect_and_compute(image, mask)
+    }
+
+    /// `descriptor = "opencv"`: the CPU describes (OpenCV's blur sums in f32
+    /// with fused multiply-adds, and its rotation uses f32 `cos`/`sin`, which
+    /// WGSL does not round the same way; docs/algorithm.md). `Backend::Gpu`
+    /// refuses; `Backend::Auto` runs the whole frame on the CPU.
+    fn opencv_descriptors(
+        &self,
+        image: GrayView<'_>,
+        mask: Option<GrayView<'_>>,
+    ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
+        if self.active_gpu().is_some() && !self.auto {
+            return Err(Error::InvalidConfig {
+                field: "descriptor",
+                reason: "`opencv` is CPU-only: OpenCV's f32 blur (fused multiply-adds) and f32 cos/sin \
+                         have no bit-exact WGSL equivalent; use Backend::Cpu or Backend::Auto"
+                    .into(),
+            });
+        }
         self.cpu.detect_and_compute(image, mask)
     }
 

@@ -16,8 +16,7 @@ use super::reflect101;
 use crate::image::Plane;
 
 /// `getGaussianKernel(7, 2, CV_32F)` as f32 bit patterns.
-pub const KERNEL_BITS: [u32; 7] =
-    [0x3d8fafb1, 0x3e06387e, 0x3e434a39, 0x3e5d4ae0, 0x3e434a39, 0x3e06387e, 0x3d8fafb1];
+pub const KERNEL_BITS: [u32; 7] = [0x3d8fafb1, 0x3e06387e, 0x3e434a39, 0x3e5d4ae0, 0x3e434a39, 0x3e06387e, 0x3d8fafb1];
 
 /// The kernel as f32.
 pub fn kernel() -> [f32; 7] {
@@ -103,8 +102,8 @@ mod tests {
         // the separable float result equals the exact 2-D sum rounded, except
         // where that sum is within f32 error of a .5 tie
         let (w, h) = (23u32, 17u32);
-        let img = Plane::from_vec(w, h, (0..w * h).map(|i| (i.wrapping_mul(2654435761) >> 11) as u8).collect())
-            .unwrap();
+        let img =
+            Plane::from_vec(w, h, (0..w * h).map(|i| (i.wrapping_mul(2654435761) >> 11) as u8).collect()).unwrap();
         let k = kernel().map(|v| v as f64);
         let b = blur_7x7_sigma2(&img);
         for y in 0..h as i64 {
@@ -112,7 +111,8 @@ mod tests {
                 let mut s = 0f64;
                 for j in 0..7 {
                     for i in 0..7 {
-                        let p = img.data[reflect101(y + j - 3, h as i64) * w as usize + reflect101(x + i - 3, w as i64)];
+                        let p =
+                            img.data[reflect101(y + j - 3, h as i64) * w as usize + reflect101(x + i - 3, w as i64)];
                         s += k[j as usize] * k[i as usize] * p as f64;
                     }
                 }
