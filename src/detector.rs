@@ -190,12 +190,17 @@ impl Detector {
         image: GrayView<'_>,
         mask: Option<GrayView<'_>>,
     ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
+        if self.config().descriptor == crate::config::DescriptorKind::Opencv {
+            return self.opencv_descriptors(image, mask);
+        }
+        self.features(image, mask)
+    }
+
+    /// Keypoints and lfast descriptors on the active backend.
+    fn features(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
         image.check()?;
         if image.width() == 0 || image.height() == 0 {
             return self.cpu.detect_and_compute(image, mask);
-        }
-        if self.config().descriptor == crate::config::DescriptorKind::Opencv {
-            return self.opencv_descriptors(image, mask);
         }
         #[cfg(feature = "gpu")]
         return self.run(
@@ -226,9 +231,9 @@ impl Detector {
         self.cpu.detect_and_compute(image, mask)
     }
 
-    /// Keypoints only.
+    /// Keypoints only (the same whichever `descriptor` the config names).
     pub fn detect(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<Vec<KeyPoint>> {
-        self.detect_and_compute(image, mask).map(|(k, _)| k)
+        self.features(image, mask).map(|(k, _)| k)
     }
 
     /// The improved Canny edge map E (255 = edge).
