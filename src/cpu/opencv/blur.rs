@@ -38,6 +38,59 @@ fn to_u8(v: f32) -> u8 {
     v.round_ties_even().clamp(0.0, 255.0) as u8
 }
 
+/// One row of the horizontal pass: `line` is the row with 3 reflected
+/// pixels each side, `out[x] = fma chain of line[x..x + 7]`.
+#[inline(always)]
+fn row_pass(line: &[f32], k: &[f32; 7], out: &mut [f32]) {
+    for (x, o) in out.iter_mut().enumerate() {
+        let mut s = 0f32;
+        for (i, &ki) in k.iter().enumerate() {
+            s = line[x + i].mul_add(ki, s);
+        }
+        *o = s;
+    }
+}
+
+/// One row of the vertical pass over the 7 filtered rows `r[0..7]`.
+#[inline(always)]
+fn col_pass(r: [&[f32]; 7], k: &[f32; 7], out: &mut [u8]) {
+    for (x, o) in out.iter_mut().enumerate() {
+        let mut s = r[3][x] * k[3];
+        for j in 1..4 {
+            s = (r[3 - j][x] + r[3 + j][x]).mul_add(k[3 + j], s);
+        }
+        *o = to_u8(s);
+    }
+}
+
+/// [`row_pass`] compiled with hardware FMA (the same results: `mul_add` is
+/// one rounding either way, only faster).
+///
+/// # Safety
+/// The CPU has FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "fma")]
+unsafe fn row_pass_fma(line: &[f32], k: &[f32; 7], out: &mut [f32]) {
+    row_pass(line, k, out)
+}
+
+/// [`col_pass`] with hardware FMA.
+///
+/// # Safety
+/// The CPU has FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "fma")]
+unsafe fn col_pass_fma(r: [&[f32]; 7], k: &[f32; 7], out: &mut [u8]) {
+    col_pass(r, k, out)
+}
+
+fn has_fma() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return std::is_x86_feature_detected!("fma");
+    #[cfg(not(target_arch = "x86_64"))]
+    false
+}
+
 /// Blurs `img` as OpenCV's ORB blurs a level.
 ///
 /// ```
@@ -45,39 +98,63 @@ fn to_u8(v: f32) -> u8 {
 /// assert!(lfast::cpu::opencv::blur::blur_7x7_sigma2(&img).data.iter().all(|&v| v == 100));
 /// ```
 pub fn blur_7x7_sigma2(img: &Plane<u8>) -> Plane<u8> {
+    use rayon::prelude::*;
     let k = kernel();
-    let (w, h) = (img.width as i64, img.height as i64);
-    // rows, for rows -3..h+3 (reflected)
-    let mut rows = vec![0f32; (w * (h + 6)) as usize];
-    for yy in 0..h + 6 {
-        let sy = reflect101(yy - 3, h);
-        let src = &img.data[sy * w as usize..(sy + 1) * w as usize];
-        for x in 0..w {
-            let mut s = 0f32;
-            for (i, &ki) in k.iter().enumerate() {
-                let sx = reflect101(x + i as i64 - 3, w);
-                s = (src[sx] as f32).mul_add(ki, s);
-            }
-            rows[(yy * w + x) as usize] = s;
-        }
-    }
+    let fma = has_fma();
+    let (w, h) = (img.width as usize, img.height as usize);
     let mut out = Plane::<u8>::new(img.width, img.height);
-    for y in 0..h {
-        for x in 0..w {
-            let r = |dy: i64| rows[((y + 3 + dy) * w + x) as usize];
-            let mut s = r(0) * k[3];
-            for j in 1..4 {
-                s = (r(-j) + r(j)).mul_add(k[3 + j as usize], s);
-            }
-            out.data[(y * w + x) as usize] = to_u8(s);
-        }
+    if w == 0 || h == 0 {
+        return out;
     }
+    // horizontal pass over rows -3..h+3 (reflect-101)
+    let mut rows = vec![0f32; w * (h + 6)];
+    rows.par_chunks_mut(w).enumerate().for_each(|(yy, o)| {
+        let sy = reflect101(yy as i64 - 3, h as i64);
+        let src = &img.data[sy * w..(sy + 1) * w];
+        let line: Vec<f32> = (0..w + 6).map(|x| src[reflect101(x as i64 - 3, w as i64)] as f32).collect();
+        #[cfg(target_arch = "x86_64")]
+        if fma {
+            // SAFETY: FMA was detected just above
+            return unsafe { row_pass_fma(&line, &k, o) };
+        }
+        row_pass(&line, &k, o);
+    });
+    out.data.par_chunks_mut(w).enumerate().for_each(|(y, o)| {
+        let r: [&[f32]; 7] = std::array::from_fn(|j| &rows[(y + j) * w..(y + j + 1) * w]);
+        #[cfg(target_arch = "x86_64")]
+        if fma {
+            // SAFETY: FMA was detected just above
+            return unsafe { col_pass_fma(r, &k, o) };
+        }
+        col_pass(r, &k, o);
+    });
+    let _ = fma;
     out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hardware_fma_path_equals_the_portable_one() {
+        let (w, h) = (37u32, 29u32);
+        let img = Plane::from_vec(w, h, (0..w * h).map(|i| (i.wrapping_mul(2246822519) >> 9) as u8).collect()).unwrap();
+        let k = kernel();
+        let (wu, hu) = (w as usize, h as usize);
+        let mut rows = vec![0f32; wu * (hu + 6)];
+        for (yy, o) in rows.chunks_mut(wu).enumerate() {
+            let sy = reflect101(yy as i64 - 3, h as i64);
+            let line: Vec<f32> =
+                (0..wu + 6).map(|x| img.data[sy * wu + reflect101(x as i64 - 3, w as i64)] as f32).collect();
+            row_pass(&line, &k, o);
+        }
+        let mut want = vec![0u8; wu * hu];
+        for (y, o) in want.chunks_mut(wu).enumerate() {
+            col_pass(std::array::from_fn(|j| &rows[(y + j) * wu..(y + j + 1) * wu]), &k, o);
+        }
+        assert_eq!(blur_7x7_sigma2(&img).data, want);
+    }
 
     #[test]
     fn kernel_is_the_formula() {
