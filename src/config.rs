@@ -116,6 +116,21 @@ impl Default for Config {
     }
 }
 
+/// The GPU pipeline computes lfast's descriptor only: `descriptor = "opencv"`
+/// is refused (OpenCV's f32 blur with fused multiply-adds and its f32
+/// `cos`/`sin` have no bit-exact WGSL equivalent; docs/algorithm.md).
+/// [`crate::Detector`] keeps detecting on the GPU and describes on the CPU.
+pub fn gpu_supports(cfg: &Config) -> Result<()> {
+    if cfg.descriptor == DescriptorKind::Opencv {
+        return Err(bad(
+            "descriptor",
+            "`opencv` is CPU-only: OpenCV's f32 blur (fused multiply-adds) and f32 cos/sin \
+             have no bit-exact WGSL equivalent; use Backend::Cpu or Backend::Auto",
+        ));
+    }
+    Ok(())
+}
+
 fn bad(field: &'static str, reason: impl Into<String>) -> Error {
     Error::InvalidConfig { field, reason: reason.into() }
 }

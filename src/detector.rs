@@ -101,8 +101,8 @@ impl Detector {
         let auto = backend == Backend::Auto;
         let gpu = match backend {
             Backend::Cpu => None,
-            Backend::Gpu => Some(GpuContext::new(opts).and_then(|ctx| GpuDetector::new(ctx, cfg))?),
-            Backend::Auto => match GpuContext::new_auto(opts).and_then(|ctx| GpuDetector::new(ctx, cfg)) {
+            Backend::Gpu => Some(GpuContext::new(opts).and_then(|ctx| GpuDetector::new(ctx, gpu_config(cfg)))?),
+            Backend::Auto => match GpuContext::new_auto(opts).and_then(|ctx| GpuDetector::new(ctx, gpu_config(cfg))) {
                 Ok(d) => Some(d),
                 Err(e) => {
                     log::warn!("GPU unavailable ({e}); using the CPU path");
@@ -117,7 +117,7 @@ impl Detector {
     #[cfg(feature = "gpu")]
     pub fn from_context(ctx: GpuContext, cfg: Config) -> Result<Self> {
         let cpu = CpuDetector::new(cfg.clone())?;
-        let det = GpuDetector::new(ctx, cfg)?;
+        let det = GpuDetector::new(ctx, gpu_config(cfg))?;
         Ok(Self { cpu, gpu: Some(Gpu { det, ws: Mutex::new(None) }), auto: false, fell_back: Default::default() })
     }
 
@@ -221,12 +221,7 @@ impl Detector {
         mask: Option<GrayView<'_>>,
     ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
         if self.active_gpu().is_some() && !self.auto {
-            return Err(Error::InvalidConfig {
-                field: "descriptor",
-                reason: "`opencv` is CPU-only: OpenCV's f32 blur (fused multiply-adds) and f32 cos/sin \
-                         have no bit-exact WGSL equivalent; use Backend::Cpu or Backend::Auto"
-                    .into(),
-            });
+            crate::config::gpu_supports(self.config())?;
         }
         self.cpu.detect_and_compute(image, mask)
     }
@@ -244,4 +239,12 @@ impl Detector {
         #[cfg(not(feature = "gpu"))]
         self.cpu.edge_image(image)
     }
+}
+
+/// The GPU detector's config: the same, but with lfast's descriptor, as the
+/// GPU only ever detects for a `descriptor = "opencv"` detector (the CPU
+/// describes, [`Detector::detect_and_compute`]).
+#[cfg(feature = "gpu")]
+fn gpu_config(cfg: Config) -> Config {
+    Config { descriptor: crate::config::DescriptorKind::Lfast, ..cfg }
 }
