@@ -82,3 +82,25 @@ fn gpu_refuses_and_auto_describes_on_the_cpu() {
     let auto = Detector::from_context_with_fallback(ctx, opencv()).unwrap();
     assert_eq!(auto.detect_and_compute(img.view(), None).unwrap(), (want_k, want_d));
 }
+
+#[test]
+fn equals_cv2_orb_compute_on_its_own_keypoints() {
+    // tests/data/orb_opencv/*.json: scripts/opencv_orb_golden.py (cv2 5.0.0)
+    let det = CpuDetector::new(opencv()).unwrap();
+    for name in ["coins", "text"] {
+        let img = load_gray(data(&format!("{name}.png"))).unwrap();
+        let text = std::fs::read_to_string(data(&format!("orb_opencv/{name}.json"))).unwrap();
+        let rows: Vec<(f32, f32, f32, i32, String)> = serde_json::from_str(&text).unwrap();
+        assert!(rows.len() > 200, "{name}");
+        assert!(rows.iter().any(|r| r.3 > 0), "{name}: keypoints of several octaves");
+        let kps: Vec<lfast::KeyPoint> = rows
+            .iter()
+            .map(|&(x, y, angle, octave, _)| lfast::KeyPoint { angle, octave, ..lfast::KeyPoint::new(x, y, 31.0) })
+            .collect();
+        let got = det.compute(img.view(), &kps).unwrap();
+        for (i, (d, r)) in got.iter().zip(&rows).enumerate() {
+            let hex: String = d.iter().map(|b| format!("{b:02x}")).collect();
+            assert_eq!(hex, r.4, "{name}: keypoint {i} {:?}", kps[i]);
+        }
+    }
+}
