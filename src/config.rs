@@ -25,6 +25,31 @@ impl std::str::FromStr for Mode {
     }
 }
 
+/// Which descriptor SPEC 11 computes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DescriptorKind {
+    /// lfast's rBRIEF: the level blurred by the SPEC 11 integer kernel,
+    /// the pattern rotated to `orientation_bins` (CPU == GPU).
+    #[default]
+    Lfast,
+    /// Bit for bit OpenCV 5 ORB `compute()` on the same keypoints
+    /// (its pyramid, its float blur, the keypoint's own angle); CPU only
+    /// (docs/algorithm.md).
+    Opencv,
+}
+
+impl std::str::FromStr for DescriptorKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "lfast" => Ok(DescriptorKind::Lfast),
+            "opencv" => Ok(DescriptorKind::Opencv),
+            _ => Err(format!("unknown descriptor `{s}` (expected lfast or opencv)")),
+        }
+    }
+}
+
 /// Every parameter of the pipeline. Build with `Config::default()` and struct
 /// update syntax, or read a TOML file with [`Config::load`]; [`Config::validate`]
 /// names the first bad field.
@@ -64,6 +89,8 @@ pub struct Config {
     pub distribution: bool,
     /// Orientation bins for the descriptor (0 = continuous angle as OpenCV), 0..=360.
     pub orientation_bins: u32,
+    /// The descriptor: `lfast` (default) or `opencv` (equal to cv2 ORB's).
+    pub descriptor: DescriptorKind,
 }
 
 /// Denominator of the rational `delta` (SPEC 1): `delta_num = round(delta * DELTA_DEN)`.
@@ -84,8 +111,24 @@ impl Default for Config {
             n_features: 0,
             distribution: false,
             orientation_bins: 30,
+            descriptor: DescriptorKind::Lfast,
         }
     }
+}
+
+/// The GPU pipeline computes lfast's descriptor only: `descriptor = "opencv"`
+/// is refused (OpenCV's f32 blur with fused multiply-adds and its f32
+/// `cos`/`sin` have no bit-exact WGSL equivalent; docs/algorithm.md).
+/// [`crate::Detector`] keeps detecting on the GPU and describes on the CPU.
+pub fn gpu_supports(cfg: &Config) -> Result<()> {
+    if cfg.descriptor == DescriptorKind::Opencv {
+        return Err(bad(
+            "descriptor",
+            "`opencv` is CPU-only: OpenCV's f32 blur (fused multiply-adds) and f32 cos/sin \
+             have no bit-exact WGSL equivalent; use Backend::Cpu or Backend::Auto",
+        ));
+    }
+    Ok(())
 }
 
 fn bad(field: &'static str, reason: impl Into<String>) -> Error {

@@ -101,8 +101,8 @@ impl Detector {
         let auto = backend == Backend::Auto;
         let gpu = match backend {
             Backend::Cpu => None,
-            Backend::Gpu => Some(GpuContext::new(opts).and_then(|ctx| GpuDetector::new(ctx, cfg))?),
-            Backend::Auto => match GpuContext::new_auto(opts).and_then(|ctx| GpuDetector::new(ctx, cfg)) {
+            Backend::Gpu => Some(GpuContext::new(opts).and_then(|ctx| GpuDetector::new(ctx, gpu_config(cfg)))?),
+            Backend::Auto => match GpuContext::new_auto(opts).and_then(|ctx| GpuDetector::new(ctx, gpu_config(cfg))) {
                 Ok(d) => Some(d),
                 Err(e) => {
                     log::warn!("GPU unavailable ({e}); using the CPU path");
@@ -117,7 +117,7 @@ impl Detector {
     #[cfg(feature = "gpu")]
     pub fn from_context(ctx: GpuContext, cfg: Config) -> Result<Self> {
         let cpu = CpuDetector::new(cfg.clone())?;
-        let det = GpuDetector::new(ctx, cfg)?;
+        let det = GpuDetector::new(ctx, gpu_config(cfg))?;
         Ok(Self { cpu, gpu: Some(Gpu { det, ws: Mutex::new(None) }), auto: false, fell_back: Default::default() })
     }
 
@@ -190,6 +190,14 @@ impl Detector {
         image: GrayView<'_>,
         mask: Option<GrayView<'_>>,
     ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
+        if self.config().descriptor == crate::config::DescriptorKind::Opencv {
+            return self.opencv_descriptors(image, mask);
+        }
+        self.features(image, mask)
+    }
+
+    /// Keypoints and lfast descriptors on the active backend.
+    fn features(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
         image.check()?;
         if image.width() == 0 || image.height() == 0 {
             return self.cpu.detect_and_compute(image, mask);
@@ -203,9 +211,24 @@ impl Detector {
         self.cpu.detect_and_compute(image, mask)
     }
 
-    /// Keypoints only.
+    /// `descriptor = "opencv"`: the CPU describes (OpenCV's blur sums in f32
+    /// with fused multiply-adds, and its rotation uses f32 `cos`/`sin`, which
+    /// WGSL does not round the same way; docs/algorithm.md). `Backend::Gpu`
+    /// refuses; `Backend::Auto` runs the whole frame on the CPU.
+    fn opencv_descriptors(
+        &self,
+        image: GrayView<'_>,
+        mask: Option<GrayView<'_>>,
+    ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
+        if self.active_gpu().is_some() && !self.auto {
+            crate::config::gpu_supports(self.config())?;
+        }
+        self.cpu.detect_and_compute(image, mask)
+    }
+
+    /// Keypoints only (the same whichever `descriptor` the config names).
     pub fn detect(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<Vec<KeyPoint>> {
-        self.detect_and_compute(image, mask).map(|(k, _)| k)
+        self.features(image, mask).map(|(k, _)| k)
     }
 
     /// The improved Canny edge map E (255 = edge).
@@ -216,4 +239,12 @@ impl Detector {
         #[cfg(not(feature = "gpu"))]
         self.cpu.edge_image(image)
     }
+}
+
+/// The GPU detector's config: the same, but with lfast's descriptor, as the
+/// GPU only ever detects for a `descriptor = "opencv"` detector (the CPU
+/// describes, [`Detector::detect_and_compute`]).
+#[cfg(feature = "gpu")]
+fn gpu_config(cfg: Config) -> Config {
+    Config { descriptor: crate::config::DescriptorKind::Lfast, ..cfg }
 }

@@ -58,7 +58,7 @@ pub mod testing;
 #[cfg(feature = "vo")]
 pub mod vo;
 
-pub use config::{Config, Mode};
+pub use config::{Config, DescriptorKind, Mode};
 pub use detector::{Backend, Detector};
 pub use error::{Error, Result};
 pub use image::{GrayView, Plane};

@@ -1,7 +1,7 @@
 //! `Config`: SPEC defaults, TOML round trip, partial files, unknown fields,
 //! validation of every range, and the errors of `Config::load`.
 
-use lfast::{Config, Error, Mode};
+use lfast::{Config, DescriptorKind, Error, Mode};
 
 #[test]
 fn defaults_are_the_spec_values() {
@@ -42,6 +42,7 @@ fn toml_round_trip() {
         n_features: 1000,
         distribution: true,
         orientation_bins: 0,
+        descriptor: DescriptorKind::Opencv,
     };
     c.validate().unwrap();
     let text = c.to_toml_string();

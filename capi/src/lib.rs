@@ -31,7 +31,7 @@ pub use results::{LfastFeatures, LfastKeyPoint, LfastPlane, lfast_features_free,
 pub use status::LfastStatus;
 
 use lfast::cpu::CpuDetector;
-use lfast::{Backend, Config, Detector, KeyPoint, Mode};
+use lfast::{Backend, Config, DescriptorKind, Detector, KeyPoint, Mode};
 use results::{features, plane};
 use status::{Failure, guard, invalid, null};
 use std::ffi::{CStr, c_char};
@@ -57,6 +57,16 @@ pub enum LfastMode {
     Paper = 0,
     /// Runs of consecutive edge pixels on the circle are one branch each.
     Branch = 1,
+}
+
+/// Which descriptor `lfast::Config::descriptor` computes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LfastDescriptorKind {
+    /// lfast's rBRIEF (SPEC 11), CPU == GPU.
+    Lfast = 0,
+    /// Bit for bit OpenCV ORB `compute()`'s on the same keypoints; CPU only.
+    Opencv = 1,
 }
 
 /// Every parameter of the detector, as `lfast::Config` (docs/algorithm.md);
@@ -88,6 +98,8 @@ pub struct LfastConfig {
     pub distribution: bool,
     /// Orientation bins of the descriptor (0 = continuous angle), 0..=360.
     pub orientation_bins: u32,
+    /// An `LfastDescriptorKind` value.
+    pub descriptor: i32,
 }
 
 impl From<&Config> for LfastConfig {
@@ -108,6 +120,10 @@ impl From<&Config> for LfastConfig {
             n_features: c.n_features,
             distribution: c.distribution,
             orientation_bins: c.orientation_bins,
+            descriptor: match c.descriptor {
+                DescriptorKind::Lfast => LfastDescriptorKind::Lfast as i32,
+                DescriptorKind::Opencv => LfastDescriptorKind::Opencv as i32,
+            },
         }
     }
 }
@@ -125,6 +141,15 @@ impl LfastConfig {
                 return Err(lfast::Error::InvalidConfig { field: "mode", reason }.into());
             }
         };
+        let descriptor = match self.descriptor {
+            0 => DescriptorKind::Lfast,
+            1 => DescriptorKind::Opencv,
+            d => {
+                let reason =
+                    format!("must be LFAST_DESCRIPTOR_KIND_LFAST (0) or LFAST_DESCRIPTOR_KIND_OPENCV (1), got {d}");
+                return Err(lfast::Error::InvalidConfig { field: "descriptor", reason }.into());
+            }
+        };
         let cfg = Config {
             delta: self.delta,
             alpha_pct: self.alpha_pct,
@@ -138,6 +163,7 @@ impl LfastConfig {
             n_features: self.n_features,
             distribution: self.distribution,
             orientation_bins: self.orientation_bins,
+            descriptor,
         };
         cfg.validate()?;
         Ok(cfg)
@@ -480,6 +506,7 @@ mod tests {
             distribution: true,
             n_features: 7,
             orientation_bins: 0,
+            descriptor: DescriptorKind::Opencv,
             ..c.to_config().ok().unwrap()
         };
         assert_eq!(LfastConfig::from(&all).to_config().ok().unwrap(), all);

@@ -10,7 +10,7 @@
 #![allow(dead_code)]
 
 use lfast::cpu::CpuDetector;
-use lfast::{Config, Error, GrayView, KeyPoint, Mode, Plane};
+use lfast::{Config, DescriptorKind, Error, GrayView, KeyPoint, Mode, Plane};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -126,6 +126,7 @@ pub fn config(r: &mut Bytes) -> Config {
         n_features: r.pick(&[0, 1, 2, 5, 50, 500]),
         distribution: r.u8() & 1 == 1,
         orientation_bins: r.pick(&[30, 0, 1, 2, 7, 360, 361]),
+        descriptor: if r.u8() & 3 == 0 { DescriptorKind::Opencv } else { DescriptorKind::Lfast },
     }
 }
 

@@ -166,7 +166,8 @@ class Detector:
     ``alpha_pct``, ``mode`` (``"branch"`` or ``"paper"``), ``support``,
     ``straight_tol``, ``border``, ``nms_radius``, ``n_levels``,
     ``scale_factor``, ``n_features`` (0 = no cap), ``distribution``,
-    ``orientation_bins``. A bad value raises ``ValueError`` naming the field;
+    ``orientation_bins``, ``descriptor`` (``"lfast"`` or ``"opencv"``: equal
+    to ``cv2.ORB_create().compute()``'s, CPU only). A bad value raises ``ValueError`` naming the field;
     an unknown name raises ``TypeError``.
 
     One detector may be shared by threads; each call releases the GIL.
@@ -218,7 +219,10 @@ class Detector:
 
         Each keypoint is described at its ``octave`` with an orientation
         recomputed from the image, so lfast's own keypoints get exactly the
-        descriptors of :meth:`detectAndCompute`. A keypoint outside the image
+        descriptors of :meth:`detectAndCompute`. With ``descriptor="opencv"``
+        the keypoint's own ``angle`` is used, as cv2 ORB's ``compute`` does,
+        and keypoints near the border (which cv2 drops) are kept, in order.
+        A keypoint outside the image
         or with an octave outside ``0..n_levels`` raises ``ValueError``.
         """
         arr = keypoints_to_array(keypoints)

@@ -17,6 +17,7 @@ pub mod local_threshold;
 pub mod matcher;
 pub mod median;
 pub mod nms;
+pub mod opencv;
 pub mod orb;
 pub mod orientation;
 pub mod otsu;
@@ -26,7 +27,7 @@ pub mod rules;
 pub mod select;
 pub(crate) mod simd;
 
-use crate::config::{Config, DELTA_DEN};
+use crate::config::{Config, DELTA_DEN, DescriptorKind};
 use crate::error::{Error, Result};
 use crate::image::{GrayView, Plane};
 use crate::keypoint::{Descriptor, KeyPoint};
@@ -270,6 +271,12 @@ impl CpuDetector {
     ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
         self.with_workspace(|ws| {
             let corners = self.find(image, mask, ws)?;
+            if self.cfg.descriptor == DescriptorKind::Opencv {
+                let kps: Vec<KeyPoint> =
+                    corners.iter().map(|c| self.keypoint(&ws.levels, c, spec::LFAST_CENTRE).0).collect();
+                let desc = self.describe_opencv(&ws.levels[0], &kps);
+                return Ok((kps, desc));
+            }
             Ok(self.describe_in(&ws.levels, &corners, spec::LFAST_CENTRE, &mut ws.smooth))
         })
     }
@@ -304,12 +311,36 @@ impl CpuDetector {
             .unzip()
     }
 
+    /// Descriptors of `kps` on `base` as OpenCV 5's ORB `compute()` makes them
+    /// (`descriptor = "opencv"`): its pyramid up to the highest octave, its
+    /// blur, each keypoint's own angle. Unlike OpenCV, keypoints near the
+    /// image border are kept, in order; their samples read the level's
+    /// reflect-101 border as OpenCV's padded pyramid has it.
+    fn describe_opencv(&self, base: &Plane<u8>, kps: &[KeyPoint]) -> Vec<Descriptor> {
+        let top = kps.iter().map(|k| k.octave.max(0) as usize + 1).max().unwrap_or(0);
+        let raw = opencv::pyramid(base, top, self.cfg.scale_factor);
+        let mut used = vec![false; top];
+        kps.iter().for_each(|k| used[k.octave.max(0) as usize] = true);
+        let levels: Vec<Option<opencv::Level>> =
+            raw.into_par_iter().zip(used).map(|(p, u)| u.then(|| opencv::Level::new(p))).collect();
+        kps.par_iter()
+            .map(|k| {
+                let l = k.octave.max(0) as u32;
+                let level = levels[l as usize].as_ref().expect("every used level is blurred");
+                opencv::describe(level, k, opencv::level_scale(self.cfg.scale_factor, l), self.pattern)
+            })
+            .collect()
+    }
+
     /// Descriptors of caller-supplied keypoints (from any detector). A keypoint
     /// is sampled at level `octave`, at pixel `floor(pt / s^octave + 0.25)`
     /// ([`spec::level_pixel`]),
     /// which is the intended pixel both for lfast's half-pixel convention and
     /// OpenCV's integer one. Orientation is recomputed from the image (the
     /// `angle` field is not read), so the result equals `detect_and_compute`'s.
+    /// With `descriptor = "opencv"` the keypoint is described as OpenCV's ORB
+    /// `compute()` does instead: its own `angle`, centre `cvRound(pt / s)`,
+    /// and, unlike OpenCV, none dropped near the border.
     pub fn compute(&self, image: GrayView<'_>, keypoints: &[KeyPoint]) -> Result<Vec<Descriptor>> {
         image.check()?;
         let sizes = self.cfg.level_sizes(image.width(), image.height());
@@ -330,6 +361,9 @@ impl CpuDetector {
                 return Err(bad(format!("position ({}, {}) is outside level {l} ({w}x{h})", kp.pt.x, kp.pt.y)));
             }
             at.push(Corner { level: l, x: x as u32, y: y as u32, response: kp.response });
+        }
+        if self.cfg.descriptor == DescriptorKind::Opencv {
+            return Ok(self.describe_opencv(&image.to_plane(), keypoints));
         }
         let top = at.iter().map(|c| c.level + 1).max().unwrap_or(1) as usize;
         Ok(self.with_workspace(|ws| {

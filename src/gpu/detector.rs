@@ -128,6 +128,7 @@ impl GpuDetector {
     /// [`new`](Self::new) with options.
     pub fn with_options(ctx: GpuContext, cfg: Config, opts: GpuDetectorOptions) -> Result<Self> {
         cfg.validate()?;
+        crate::config::gpu_supports(&cfg)?;
         if cfg.distribution {
             return Err(Error::Unsupported {
                 reason: "`distribution` (ORB-SLAM quadtree) runs on the CPU backend only".into(),

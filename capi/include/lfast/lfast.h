@@ -49,6 +49,14 @@ typedef enum {
   LFAST_BACKEND_CPU = 2,
 } LfastBackend;
 
+// Which descriptor `lfast::Config::descriptor` computes.
+typedef enum {
+  // lfast's rBRIEF (SPEC 11), CPU == GPU.
+  LFAST_DESCRIPTOR_KIND_LFAST = 0,
+  // Bit for bit OpenCV ORB `compute()`'s on the same keypoints; CPU only.
+  LFAST_DESCRIPTOR_KIND_OPENCV = 1,
+} LfastDescriptorKind;
+
 // Values of `LfastConfig.mode` (SPEC 8).
 typedef enum {
   // Every edge pixel on the circle is a `t_i` (the paper's steps literally).
@@ -103,6 +111,8 @@ typedef struct {
   bool distribution;
   // Orientation bins of the descriptor (0 = continuous angle), 0..=360.
   uint32_t orientation_bins;
+  // An `LfastDescriptorKind` value.
+  int32_t descriptor;
 } LfastConfig;
 
 // A borrowed image: `height` rows of `width` pixels, row `y` starting at

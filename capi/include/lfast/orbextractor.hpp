@@ -16,7 +16,10 @@ namespace lfast {
 /// coordinates with `octave` set to their pyramid level and `size` 31 times
 /// its scale, as ORB-SLAM3 expects; they are spread over the image by
 /// ORB-SLAM's quadtree (`distribution`), and oriented continuously
-/// (`orientation_bins = 0`).
+/// (`orientation_bins = 0`). Their descriptors are cv2 ORB's bit for bit
+/// (`descriptor = "opencv"`), as ORBvoc.txt was trained on: so the extractor
+/// describes on the CPU (Backend::Gpu throws on it, Backend::Auto describes
+/// on the CPU; docs/algorithm.md).
 ///
 /// `iniThFAST` and `minThFAST` are kept for the interface only: L-FAST's
 /// thresholds come from its adaptive Canny stage (SPEC 1-5), not from a FAST
@@ -105,6 +108,7 @@ protected:
         c.n_levels = nlevels < 0 ? UINT32_MAX : static_cast<uint32_t>(nlevels);
         c.distribution = true;
         c.orientation_bins = 0;
+        c.descriptor = LFAST_DESCRIPTOR_KIND_OPENCV;
         return c;
     }
 
