@@ -64,6 +64,10 @@ pub struct Config {
     pub distribution: bool,
     /// Orientation bins for the descriptor (0 = continuous angle as OpenCV), 0..=360.
     pub orientation_bins: u32,
+    /// Beyond the paper: each corner that survives corner NMS moves to the
+    /// Harris maximum within this many pixels (0 = stays on its edge pixel);
+    /// `2 * snap_radius <= nms_radius` keeps positions distinct (docs/quality.md).
+    pub snap_radius: u32,
 }
 
 /// Denominator of the rational `delta` (SPEC 1): `delta_num = round(delta * DELTA_DEN)`.
@@ -84,6 +88,7 @@ impl Default for Config {
             n_features: 0,
             distribution: false,
             orientation_bins: 30,
+            snap_radius: 0,
         }
     }
 }
@@ -127,6 +132,16 @@ impl Config {
         }
         if !self.scale_factor.is_finite() || self.scale_factor <= 1.0 || self.scale_factor > 4.0 {
             return Err(bad("scale_factor", format!("must be a finite number in (1, 4], got {}", self.scale_factor)));
+        }
+        if 2 * self.snap_radius > self.nms_radius {
+            return Err(bad(
+                "snap_radius",
+                format!(
+                    "must be at most nms_radius / 2 = {} (snapped corners must stay apart), got {}",
+                    self.nms_radius / 2,
+                    self.snap_radius
+                ),
+            ));
         }
         if self.orientation_bins > 360 {
             return Err(bad(

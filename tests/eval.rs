@@ -327,6 +327,7 @@ fn candidate(v: lfast::eval::Variant, score: f64, points: f64) -> lfast::eval::r
         ms_budget: score,
         survival: score,
         vo_ate: None,
+        vo_rel: None,
     }
 }
 
@@ -357,6 +358,28 @@ fn choice_of_defaults_rule() {
     let cands = vec![candidate(current, 0.40, 1000.0), candidate(a, 0.46, 2400.0), candidate(b, 0.44, 100.0)];
     assert_eq!(choose(cands, String::new()).unwrap().chosen, a);
     assert!(choose(vec![], String::new()).is_none());
+}
+
+#[test]
+fn choice_of_defaults_counts_the_trajectory() {
+    use lfast::eval::Variant;
+    use lfast::eval::report::choose;
+    let d = lfast::Config::default();
+    let current = Variant { mode: d.mode, support: d.support };
+    let a = Variant::ALL.into_iter().find(|&v| v != current).unwrap();
+    let with_ate = |v, s, ate| lfast::eval::report::Candidate { vo_ate: Some(ate), ..candidate(v, s, 1000.0) };
+    // a leads by 0.02 on the image suites, but its trajectory is twice as far off:
+    // (0.46 * 3 + 0.5) / 4 = 0.47 against (0.44 * 3 + 1) / 4 = 0.58
+    let dec = choose(vec![with_ate(current, 0.44, 0.05), with_ate(a, 0.46, 0.10)], String::new()).unwrap();
+    assert_eq!((dec.best, dec.chosen), (current, current));
+    let c = &dec.candidates;
+    assert_eq!((c[0].vo_rel, c[1].vo_rel), (Some(1.0), Some(0.5)));
+    assert!((c[1].score() - 0.47).abs() < 1e-12, "{}", c[1].score());
+    // without the ATE of every candidate, the image suites alone decide
+    let dec = choose(vec![with_ate(current, 0.44, 0.05), candidate(a, 0.46, 1000.0)], String::new()).unwrap();
+    assert_eq!(dec.chosen, a);
+    assert!(dec.candidates.iter().all(|c| c.vo_rel.is_none()));
+    assert!(dec.table().contains("not scored"));
 }
 
 // ---------------------------------------------------------- the CLI, end to end

@@ -38,6 +38,7 @@ pub mod vo;
 
 use crate::baseline::fast::fast9;
 use crate::baseline::orb::{OrbDetector, OrbParams};
+use crate::baseline::orbslam::{OrbSlamDetector, OrbSlamParams};
 use crate::config::{Config, Mode};
 use crate::cpu::CpuDetector;
 use crate::image::Plane;
@@ -231,6 +232,8 @@ pub struct Detectors {
     pub describer: CpuDetector,
     /// ORB as `cv2.ORB_create()` (500 features).
     pub orb: OrbDetector,
+    /// ORB-SLAM's extractor with its settings files' 1000 features.
+    pub orbslam: OrbSlamDetector,
 }
 
 impl Detectors {
@@ -241,6 +244,7 @@ impl Detectors {
             lfast,
             describer: CpuDetector::new(Config::default())?,
             orb: Self::orb_with(OrbParams::default().n_features)?,
+            orbslam: Self::orbslam_with(OrbSlamParams::default().n_features)?,
         })
     }
 
@@ -264,6 +268,15 @@ impl Detectors {
     pub fn orb_with(n: u32) -> Result<OrbDetector> {
         let cfg = Config { n_features: n, ..Config::default() };
         Ok(OrbDetector::new(crate::frontend::orb_params(&cfg, FAST_THRESHOLD, n))?)
+    }
+}
+
+impl Detectors {
+    /// ORB-SLAM's extractor with a budget of `n` features, built as every
+    /// front end builds it ([`crate::frontend::orbslam_params`]).
+    pub fn orbslam_with(n: u32) -> Result<OrbSlamDetector> {
+        let cfg = Config { n_features: n, ..Config::default() };
+        Ok(OrbSlamDetector::new(crate::frontend::orbslam_params(&cfg, n))?)
     }
 }
 
@@ -407,6 +420,7 @@ pub fn label(key: &str) -> String {
     match key {
         "fast9" => "FAST-9".into(),
         "orb" => "ORB".into(),
+        "orbslam" => "ORB-SLAM".into(),
         "canny" => "Canny".into(),
         "improved-canny" => "improved Canny".into(),
         LFAST_L0 => "L-FAST default, level 0".into(),
@@ -422,6 +436,7 @@ pub fn colour_of(key: &str) -> usize {
     match key {
         "fast9" | "canny" => 3,
         "orb" => 1,
+        "orbslam" => 5,
         "improved-canny" => 0,
         LFAST_L0 => 9,
         "lfast-paper-s3" => 4,
