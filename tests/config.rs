@@ -36,12 +36,13 @@ fn toml_round_trip() {
         support: 5,
         straight_tol: 2,
         border: 20,
-        nms_radius: 1,
+        nms_radius: 4,
         n_levels: 4,
         scale_factor: 1.5,
         n_features: 1000,
         distribution: true,
         orientation_bins: 0,
+        snap_radius: 2,
     };
     c.validate().unwrap();
     let text = c.to_toml_string();
@@ -109,6 +110,8 @@ fn invalid_values_name_their_field() {
         ("straight_tol", Config { straight_tol: 8, ..d() }, "straight_tol = 8"),
         ("nms_radius", Config { nms_radius: 33, ..d() }, "nms_radius = 33"),
         ("orientation_bins", Config { orientation_bins: 361, ..d() }, "orientation_bins = 361"),
+        ("snap_radius", Config { snap_radius: 2, nms_radius: 3, ..d() }, "snap_radius = 2\nnms_radius = 3"),
+        ("snap_radius", Config { snap_radius: 1, nms_radius: 1, ..d() }, "snap_radius = 1\nnms_radius = 1"),
     ];
     for (field, cfg, toml) in cases {
         let e = cfg.validate().unwrap_err();

@@ -126,6 +126,7 @@ pub fn config(r: &mut Bytes) -> Config {
         n_features: r.pick(&[0, 1, 2, 5, 50, 500]),
         distribution: r.u8() & 1 == 1,
         orientation_bins: r.pick(&[30, 0, 1, 2, 7, 360, 361]),
+        snap_radius: r.pick(&[0, 0, 1, 2, 17]),
     }
 }
 

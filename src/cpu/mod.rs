@@ -24,8 +24,8 @@ pub mod pyramid;
 pub mod response;
 pub mod rules;
 pub mod select;
-pub mod snap;
 pub(crate) mod simd;
+pub mod snap;
 
 use crate::config::{Config, DELTA_DEN};
 use crate::error::{Error, Result};
@@ -383,10 +383,11 @@ impl CpuDetector {
             fused::edges_fused_into(img.view(), self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct, em);
             let cands = lfast::lfast(&em.edges, masks.as_ref().map(|m| &m[l]), &params);
             let resp = response::responses(&em.denoised, &cands);
-            let mut kept: Vec<Corner> = corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
-                .into_iter()
-                .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] })
-                .collect();
+            let mut kept: Vec<Corner> =
+                corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
+                    .into_iter()
+                    .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] })
+                    .collect();
             if self.cfg.snap_radius > 0 {
                 snap::snap_all(&em.denoised, masks.as_ref().map(|m| &m[l]), &mut kept, self.cfg.snap_radius);
             }

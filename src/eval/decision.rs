@@ -7,7 +7,6 @@ use super::kitti::KittiSummary;
 use super::output::read_summary;
 use super::repeatability::RepeatSummary;
 use super::{Result, Suite, Variant, mode_name};
-use crate::config::Config;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -104,8 +103,7 @@ pub fn choose(mut candidates: Vec<Candidate>, basis: String) -> Option<Decision>
     relative_ate(&mut candidates);
     let best = candidates.iter().max_by(|a, b| a.score().total_cmp(&b.score()))?;
     let (best_variant, best_score) = (best.variant, best.score());
-    let d = Config::default();
-    let current = Variant { mode: d.mode, support: d.support };
+    let current = Variant::current();
     let current_score = candidates.iter().find(|c| c.variant == current).map(Candidate::score);
     let chosen = match current_score {
         Some(cur) if best_score - cur <= DECISION_MARGIN => current,
@@ -164,7 +162,11 @@ pub fn decide(out: &Path) -> Result<Option<Decision>> {
 }
 
 fn variant_label(v: Variant) -> String {
-    format!("{} / support {}", mode_name(v.mode), v.support)
+    if v.snap > 0 {
+        format!("{} / support {} / snap {}", mode_name(v.mode), v.support, v.snap)
+    } else {
+        format!("{} / support {}", mode_name(v.mode), v.support)
+    }
 }
 
 impl Decision {
@@ -194,7 +196,7 @@ impl Decision {
             .collect();
         table(
             &[
-                "L-FAST mode / support",
+                "L-FAST mode / support / snap",
                 "KITTI points/frame",
                 "KITTI ms/frame",
                 "repeatability (all)",
@@ -213,7 +215,9 @@ impl Decision {
     pub fn verdict(&self) -> String {
         let score = |v: Variant| self.candidates.iter().find(|c| c.variant == v).map_or(f64::NAN, Candidate::score);
         let points = |v: Variant| self.candidates.iter().find(|c| c.variant == v).map_or(f64::NAN, |c| c.kitti_points);
-        let cfg = |v: Variant| format!("`mode = \"{}\"`, `support = {}`", mode_name(v.mode), v.support);
+        let cfg = |v: Variant| {
+            format!("`mode = \"{}\"`, `support = {}`, `snap_radius = {}`", mode_name(v.mode), v.support, v.snap)
+        };
         let (cur, best, chosen) = (self.current, self.best, self.chosen);
         if chosen == cur && best == cur {
             format!("Keep the current defaults {}: they score best ({}).", cfg(cur), num(score(cur), 3))
@@ -261,8 +265,8 @@ impl Decision {
         let _ = writeln!(s, "## Choice of defaults (from suites 3-6)\n");
         let _ = writeln!(
             s,
-            "Candidates: L-FAST `mode` in {{paper, branch}} x `support` in {{3, 4}}, everything else as \
-             `Config::default()`. Score = mean of repeatability and matching score at a budget of \
+            "Candidates: L-FAST `mode` in {{paper, branch}} x `support` in {{3, 4}}, and the two \
+             support-3 ones with `snap_radius = 1` (docs/quality.md), everything else as `Config::default()`. Score = mean of repeatability and matching score at a budget of \
              {DECISION_BUDGET} keypoints (suite 4, every pair of every scene), keypoint survival (suite \
              5, every image, the four changes) and, when suite 6 ran for every candidate, the relative \
              trajectory accuracy: the smallest visual-odometry ATE RMSE (SE(3)) of the candidates over the \

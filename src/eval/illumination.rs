@@ -232,7 +232,7 @@ pub fn run(opts: &Options) -> Result<()> {
         }
     }
     let m = |key: &str| mean(means.iter().filter(|x| x.key == key).map(|x| x.survival));
-    let current = super::Variant { mode: Config::default().mode, support: Config::default().support }.key();
+    let current = super::Variant::current().key();
     let md = format!(
         "## 5. Illumination: what survives a brightness change (the paper's claim, measured)\n\n\
          {n_standard} standard image(s) and {} KITTI frame(s), each changed four ways: gamma 0.5, gamma 2.0, a shadow \

@@ -240,7 +240,7 @@ pub fn run(opts: &Options) -> Result<()> {
         .transpose()?
         .map(|p| format!("{}x{}", p.width, p.height))
         .unwrap_or_default();
-    let current = Variant { mode: Config::default().mode, support: Config::default().support }.key();
+    let current = Variant::current().key();
     let trow: Vec<Vec<String>> = means
         .iter()
         .map(|m| {

@@ -168,39 +168,50 @@ impl Options {
     }
 }
 
-/// One L-FAST configuration under evaluation: the two defaults that suites
-/// 3-5 decide between, everything else as `Config::default()`.
+/// One L-FAST configuration under evaluation: the defaults that suites 3-6
+/// decide between, everything else as `Config::default()`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Variant {
     /// SPEC 8 mode.
     pub mode: Mode,
     /// SPEC 8 `support`.
     pub support: u32,
+    /// `Config::snap_radius` (docs/quality.md), 0 = corners stay on their edge pixel.
+    pub snap: u32,
 }
 
 impl Variant {
-    /// The four candidates: {Paper, Branch} x support {3, 4}.
-    pub const ALL: [Variant; 4] = [
-        Variant { mode: Mode::Paper, support: 3 },
-        Variant { mode: Mode::Paper, support: 4 },
-        Variant { mode: Mode::Branch, support: 3 },
-        Variant { mode: Mode::Branch, support: 4 },
+    /// The candidates: {Paper, Branch} x support {3, 4} as the paper's corners,
+    /// and the two support-3 ones with their corners snapped within 1 px.
+    pub const ALL: [Variant; 6] = [
+        Variant { mode: Mode::Paper, support: 3, snap: 0 },
+        Variant { mode: Mode::Paper, support: 4, snap: 0 },
+        Variant { mode: Mode::Branch, support: 3, snap: 0 },
+        Variant { mode: Mode::Branch, support: 4, snap: 0 },
+        Variant { mode: Mode::Paper, support: 3, snap: 1 },
+        Variant { mode: Mode::Branch, support: 3, snap: 1 },
     ];
 
-    /// A stable key for files and JSON, e.g. `lfast-branch-s4`.
-    pub fn key(self) -> String {
-        format!("lfast-{}-s{}", mode_name(self.mode), self.support)
+    /// The variant `Config::default()` is.
+    pub fn current() -> Variant {
+        let d = Config::default();
+        Variant { mode: d.mode, support: d.support, snap: d.snap_radius }
     }
 
-    /// The configuration: the defaults with this mode and support.
+    /// A stable key for files and JSON, e.g. `lfast-branch-s4`, `lfast-branch-s3-snap1`.
+    pub fn key(self) -> String {
+        let snap = if self.snap > 0 { format!("-snap{}", self.snap) } else { String::new() };
+        format!("lfast-{}-s{}{snap}", mode_name(self.mode), self.support)
+    }
+
+    /// The configuration: the defaults with this mode, support and snap radius.
     pub fn config(self) -> Config {
-        Config { mode: self.mode, support: self.support, ..Config::default() }
+        Config { mode: self.mode, support: self.support, snap_radius: self.snap, ..Config::default() }
     }
 
     /// True for the variant `Config::default()` uses now.
     pub fn is_current_default(self) -> bool {
-        let d = Config::default();
-        d.mode == self.mode && d.support == self.support
+        self == Variant::current()
     }
 
     /// The variant with this key.
@@ -425,6 +436,7 @@ pub fn label(key: &str) -> String {
         "improved-canny" => "improved Canny".into(),
         LFAST_L0 => "L-FAST default, level 0".into(),
         k => match Variant::from_key(k) {
+            Some(v) if v.snap > 0 => format!("L-FAST {} s{} snap{}", mode_name(v.mode), v.support, v.snap),
             Some(v) => format!("L-FAST {} s{}", mode_name(v.mode), v.support),
             None => k.into(),
         },
@@ -443,6 +455,8 @@ pub fn colour_of(key: &str) -> usize {
         "lfast-paper-s4" => 6,
         "lfast-branch-s3" => 2,
         "lfast-branch-s4" => 0,
+        "lfast-paper-s3-snap1" => 8,
+        "lfast-branch-s3-snap1" => 10,
         _ => 7,
     }
 }

@@ -102,8 +102,8 @@ pub fn run(opts: &Options) -> Result<()> {
             .map_err(vo_err)?;
         rows.extend(rows_of(&t, |_| v.key()));
     }
-    let t = crate::vo::run_suite(&seq, &[FrontEnd::Fast, FrontEnd::Orb, FrontEnd::Orbslam], &base, None)
-        .map_err(vo_err)?;
+    let t =
+        crate::vo::run_suite(&seq, &[FrontEnd::Fast, FrontEnd::Orb, FrontEnd::Orbslam], &base, None).map_err(vo_err)?;
     rows.extend(rows_of(&t, |f| match f {
         FrontEnd::Fast => "fast9".into(),
         other => other.name().into(),

@@ -140,9 +140,6 @@ impl GpuDetector {
                 reason: "`distribution` (ORB-SLAM quadtree) runs on the CPU backend only".into(),
             });
         }
-        if cfg.snap_radius > 0 {
-            return Err(Error::Unsupported { reason: "`snap_radius` > 0 runs on the CPU backend only".into() });
-        }
         if opts.ring == 0 {
             return Err(Error::InvalidConfig { field: "ring", reason: "must be at least 1".into() });
         }
