@@ -1,6 +1,6 @@
 // Beyond the paper (docs/quality.md): each corner that survived corner NMS
 // moves to the Harris maximum of the (2s+1)^2 square around it, s =
-// P.snap_radius, and takes that response. Mirrors src/cpu/snap.rs.
+// P.snap_radius (Config::snap()), and takes that response. Mirrors src/cpu/snap.rs.
 // Compiled after response.wgsl (src/gpu/snap.rs): its Harris response on D
 // (structure_sums, harris_from_sums, bit-identical to the CPU) is the one
 // definition used here; this file adds the entry point `snap`.

@@ -166,7 +166,7 @@ class Detector:
     ``alpha_pct``, ``mode`` (``"branch"`` or ``"paper"``), ``support``,
     ``straight_tol``, ``border``, ``nms_radius``, ``n_levels``,
     ``scale_factor``, ``n_features`` (0 = no cap), ``distribution``,
-    ``orientation_bins``. A bad value raises ``ValueError`` naming the field;
+    ``orientation_bins``, ``snap_radius``. A bad value raises ``ValueError`` naming the field;
     an unknown name raises ``TypeError``.
 
     One detector may be shared by threads; each call releases the GIL.

@@ -388,8 +388,8 @@ impl CpuDetector {
                     .into_iter()
                     .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] })
                     .collect();
-            if self.cfg.snap_radius > 0 {
-                snap::snap_all(&em.denoised, masks.as_ref().map(|m| &m[l]), &mut kept, self.cfg.snap_radius);
+            if self.cfg.snap() > 0 {
+                snap::snap_all(&em.denoised, masks.as_ref().map(|m| &m[l]), &mut kept, self.cfg.snap());
             }
             kept
         };

@@ -1,12 +1,12 @@
 //! Beyond the paper (docs/quality.md): each corner that survived corner NMS
 //! moves to the Harris maximum of the (2s+1)^2 square around it, `s` =
-//! `Config::snap_radius`, and takes that response. L-FAST's candidates are
+//! `Config::snap()`, and takes that response. L-FAST's candidates are
 //! edge pixels; a corner's Harris maximum lies inside the corner, a pixel or
 //! two off the edge, and repeats where the edge pixel does not.
 //! Mirrors shaders/snap.wgsl.
 //!
 //! Positions stay distinct: survivors of corner NMS with radius r are more
-//! than r apart (Chebyshev), and `2s <= r` (`Config::validate`). The square
+//! than r apart (Chebyshev), and `2s <= r` ([`crate::Config::snap`]). The square
 //! is scanned row by row; the first of equal responses wins (the earlier
 //! (y, x), as in corner NMS). With a mask, only pixels where the level mask
 //! is on are candidates (the corner's own pixel always is).
