@@ -6,8 +6,8 @@
 // definition used here; this file adds the entry point `snap`.
 // `corners` (counters[CORNERS] of them, any order) are updated in place; the
 // square is scanned row by row and the first of equal responses wins (the
-// earlier (y, x), as in corner NMS); with a mask, only pixels where the level
-// mask is on are candidates. 2s <= nms_radius keeps positions distinct.
+// earlier (y, x), as in corner NMS); only pixels at least P.border from every
+// side and, with a mask, where the level mask is on are candidates. 2s <= nms_radius keeps positions distinct.
 // Tests: tests/gpu_end_to_end.rs (whole pipeline with snap_radius 1 and 2 == CPU).
 
 @group(0) @binding(5) var<storage, read_write> corners: array<Kp>;
@@ -28,10 +28,12 @@ fn snap(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     if (s == 0u || k >= min(counters[C_SNAP_CORNERS], P.capacity)) { return; }
     var c = corners[k];
     let l = c.level;
-    let x0 = select(0u, c.px - s, c.px >= s);
-    let y0 = select(0u, c.py - s, c.py >= s);
-    let x1 = min(c.px + s, lw(l) - 1u);
-    let y1 = min(c.py + s, lh(l) - 1u);
+    // corners lie in [border, size - border): the square is cut to it
+    let b = P.border;
+    let x0 = max(select(0u, c.px - s, c.px >= s), b);
+    let y0 = max(select(0u, c.py - s, c.py >= s), b);
+    let x1 = min(c.px + s, lw(l) - b - 1u);
+    let y1 = min(c.py + s, lh(l) - b - 1u);
     var bx = c.px;
     var by = c.py;
     var br = harris_at(l, c.px, c.py);

@@ -389,7 +389,8 @@ impl CpuDetector {
                     .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] })
                     .collect();
             if self.cfg.snap() > 0 {
-                snap::snap_all(&em.denoised, masks.as_ref().map(|m| &m[l]), &mut kept, self.cfg.snap());
+                let m = masks.as_ref().map(|m| &m[l]);
+                snap::snap_all(&em.denoised, m, &mut kept, self.cfg.snap(), params.border);
             }
             kept
         };

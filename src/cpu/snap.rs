@@ -8,28 +8,30 @@
 //! Positions stay distinct: survivors of corner NMS with radius r are more
 //! than r apart (Chebyshev), and `2s <= r` ([`crate::Config::snap`]). The square
 //! is scanned row by row; the first of equal responses wins (the earlier
-//! (y, x), as in corner NMS). With a mask, only pixels where the level mask
-//! is on are candidates (the corner's own pixel always is).
+//! (y, x), as in corner NMS). Only pixels at least `border` from every side
+//! (where the corner test runs) and, with a mask, where the level mask is on
+//! are candidates (the corner's own pixel always is).
 
 use super::response::harris;
 use super::select::Corner;
 use crate::image::Plane;
 
 /// `c` moved to the Harris maximum on `d` (the level's denoised image) within
-/// `s` pixels, inside the level, where `mask` (if any) is on.
+/// `s` pixels, at least `border` pixels from every side, where `mask` (if any) is on.
 ///
 /// ```
 /// use lfast::{Plane, cpu::{select::Corner, snap::snap}};
 /// // a bright quadrant x >= 10, y >= 10: the Harris maximum is near (10, 10)
 /// let img = Plane::from_vec(21, 21, (0..441).map(|i| if i % 21 >= 10 && i / 21 >= 10 { 200 } else { 20 }).collect()).unwrap();
 /// let c = Corner { level: 0, x: 12, y: 10, response: 0.0 };
-/// let moved = snap(&img, None, c, 2);
+/// let moved = snap(&img, None, c, 2, 7);
 /// assert!(moved.x < 12 && moved.response > lfast::cpu::response::harris(&img, 12, 10));
-/// assert_eq!(snap(&img, None, c, 0), Corner { response: lfast::cpu::response::harris(&img, 12, 10), ..c });
+/// assert_eq!(snap(&img, None, c, 0, 7), Corner { response: lfast::cpu::response::harris(&img, 12, 10), ..c });
 /// ```
-pub fn snap(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32) -> Corner {
-    let (x0, y0) = (c.x.saturating_sub(s), c.y.saturating_sub(s));
-    let (x1, y1) = ((c.x + s).min(d.width - 1), (c.y + s).min(d.height - 1));
+pub fn snap(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32, border: u32) -> Corner {
+    let (x0, y0) = (c.x.saturating_sub(s).max(border), c.y.saturating_sub(s).max(border));
+    let (x1, y1) =
+        ((c.x + s).min(d.width.saturating_sub(border + 1)), (c.y + s).min(d.height.saturating_sub(border + 1)));
     let mut best = Corner { response: harris(d, c.x, c.y), ..c };
     for y in y0..=y1 {
         for x in x0..=x1 {
@@ -46,9 +48,9 @@ pub fn snap(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32) -> Corne
 }
 
 /// [`snap`] on every corner of one level, in order.
-pub fn snap_all(d: &Plane<u8>, mask: Option<&Plane<u8>>, corners: &mut [Corner], s: u32) {
+pub fn snap_all(d: &Plane<u8>, mask: Option<&Plane<u8>>, corners: &mut [Corner], s: u32, border: u32) {
     use rayon::prelude::*;
-    corners.par_iter_mut().for_each(|c| *c = snap(d, mask, *c, s));
+    corners.par_iter_mut().for_each(|c| *c = snap(d, mask, *c, s, border));
 }
 
 #[cfg(test)]
@@ -62,12 +64,13 @@ mod tests {
     }
 
     /// The naive reference: the maximum over the square by (response, then
-    /// earliest (y, x)), every pixel inside the level and on in the mask.
-    fn naive(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32) -> Corner {
+    /// earliest (y, x)), every pixel `border` inside the level and on in the mask.
+    fn naive(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32, border: u32) -> Corner {
+        let b = border as i64;
         let mut all = Vec::new();
         for y in c.y as i64 - s as i64..=c.y as i64 + s as i64 {
             for x in c.x as i64 - s as i64..=c.x as i64 + s as i64 {
-                if x < 0 || y < 0 || x >= d.width as i64 || y >= d.height as i64 {
+                if x < b || y < b || x >= d.width as i64 - b || y >= d.height as i64 - b {
                     continue;
                 }
                 let (x, y) = (x as u32, y as u32);
@@ -86,12 +89,15 @@ mod tests {
         for seed in 0..4 {
             let d = random(23, 19, seed);
             let m = random(23, 19, seed + 100);
-            for y in 0..19 {
-                for x in 0..23 {
-                    let c = Corner { level: 2, x, y, response: -1.0 };
-                    for s in 0..3 {
-                        assert_eq!(snap(&d, None, c, s), naive(&d, None, c, s), "{seed} {x} {y} {s}");
-                        assert_eq!(snap(&d, Some(&m), c, s), naive(&d, Some(&m), c, s), "{seed} {x} {y} {s}");
+            for border in [0, 2, 7] {
+                for y in border..19 - border {
+                    for x in border..23 - border {
+                        let c = Corner { level: 2, x, y, response: -1.0 };
+                        for s in 0..3 {
+                            let what = format!("{seed} {x} {y} {s} {border}");
+                            assert_eq!(snap(&d, None, c, s, border), naive(&d, None, c, s, border), "{what}");
+                            assert_eq!(snap(&d, Some(&m), c, s, border), naive(&d, Some(&m), c, s, border), "{what}");
+                        }
                     }
                 }
             }
@@ -102,7 +108,7 @@ mod tests {
     fn ties_go_to_the_earliest_position() {
         // a flat image: every response is 0, the first pixel of the square wins
         let d = Plane::from_vec(9, 9, vec![50; 81]).unwrap();
-        let c = snap(&d, None, Corner { level: 0, x: 4, y: 4, response: 7.0 }, 1);
+        let c = snap(&d, None, Corner { level: 0, x: 4, y: 4, response: 7.0 }, 1, 0);
         assert_eq!((c.x, c.y, c.response), (3, 3, 0.0));
     }
 }
