@@ -59,10 +59,11 @@ fn bench_variants(c: &mut Criterion, img: &Plane<u8>) {
     let d = Config::default();
     let variants = [
         ("default", d.clone()),
-        ("branch_s4", Config { mode: Mode::Branch, support: 4, ..d.clone() }),
-        ("branch_s3", Config { mode: Mode::Branch, support: 3, ..d.clone() }),
+        ("branch_s4", Config { mode: Mode::Branch, support: 4, snap_radius: 0, ..d.clone() }),
+        ("paper_s3_snap1", Config { mode: Mode::Paper, support: 3, snap_radius: 1, ..d.clone() }),
+        ("branch_s3", Config { mode: Mode::Branch, support: 3, snap_radius: 0, ..d.clone() }),
         ("branch_s3_snap1", Config { mode: Mode::Branch, support: 3, snap_radius: 1, ..d.clone() }),
-        ("paper_s3", Config { mode: Mode::Paper, support: 3, ..d.clone() }),
+        ("paper_s3", Config { mode: Mode::Paper, support: 3, snap_radius: 0, ..d.clone() }),
     ];
     let mut g = c.benchmark_group(format!("variants_{}x{}", img.width, img.height));
     g.sample_size(20).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(3));

@@ -472,9 +472,19 @@ fn cli_repeatability_on_a_shifted_scene() {
             .find(|r| r[col("pair")] == pair && r[col("detector")] == det && r[col("budget")] == budget)
             .unwrap_or_else(|| panic!("no row {pair} {det} {budget}"))
     };
-    // 6 detectors x 3 budgets x 2 pairs
-    assert_eq!(rows.len(), 1 + 6 * 3 * 2);
-    for det in ["fast9", "orb", "lfast-paper-s3", "lfast-paper-s4", "lfast-branch-s3", "lfast-branch-s4"] {
+    // 9 detectors x 3 budgets x 2 pairs
+    assert_eq!(rows.len(), 1 + 9 * 3 * 2);
+    for det in [
+        "fast9",
+        "orb",
+        "orbslam",
+        "lfast-paper-s3",
+        "lfast-paper-s4",
+        "lfast-branch-s3",
+        "lfast-branch-s4",
+        "lfast-paper-s3-snap1",
+        "lfast-branch-s3-snap1",
+    ] {
         // img3 is img1: every detector repeats and matches every keypoint
         let r = get("1-3", det, "all");
         assert!(r[col("n1")].parse::<usize>().unwrap() > 0, "{det}: no keypoints");
@@ -503,7 +513,7 @@ fn cli_all_quick_on_a_tiny_root() {
         "## 4. Repeatability",
         "## 5. Illumination",
         "## 6. Visual odometry",
-        "## Choice of defaults (from suites 3-5)",
+        "## Choice of defaults (from suites 3-6)",
     ] {
         assert!(report.contains(h), "missing {h}");
     }
@@ -589,10 +599,10 @@ fn cli_quick_suites_on_the_shared_data() {
     let k = csv_rows(&out.join("kitti.csv"));
     let fast0 = k.iter().find(|r| r[0] == "000000" && r[1] == "fast9").unwrap();
     assert_eq!(fast0[2], "3716");
-    assert_eq!(k.len(), 1 + 3 * 7, "3 frames x 7 detectors");
-    // one pair of boat, 6 detectors x 3 budgets; every score a fraction
+    assert_eq!(k.len(), 1 + 3 * 10, "3 frames x 10 detectors");
+    // one pair of boat, 9 detectors x 3 budgets; every score a fraction
     let r = csv_rows(&out.join("repeatability.csv"));
-    assert_eq!(r.len(), 1 + 18);
+    assert_eq!(r.len(), 1 + 27);
     for row in &r[1..] {
         let rep: f64 = row[9].parse().unwrap();
         assert!((0.0..=1.0).contains(&rep) && row[1] == "1-2", "{row:?}");

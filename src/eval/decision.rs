@@ -78,7 +78,7 @@ pub fn relative_ate(candidates: &mut [Candidate]) {
     }
 }
 
-/// The choice of defaults made from suites 3-5.
+/// The choice of defaults made from suites 3-6.
 #[derive(Clone, Debug)]
 pub struct Decision {
     /// Every candidate, in [`Variant::ALL`] order.
@@ -116,7 +116,7 @@ pub fn choose(mut candidates: Vec<Candidate>, basis: String) -> Option<Decision>
     Some(Decision { candidates, best: best_variant, current, chosen, basis })
 }
 
-/// The decision from the summaries in `out`; `None` when one of suites 3-5 is missing.
+/// The decision from the summaries in `out` (suite 6 counts when it ran); `None` when one of suites 3-5 is missing.
 pub fn decide(out: &Path) -> Result<Option<Decision>> {
     let (Some(k), Some(r), Some(i)) = (
         read_summary::<KittiSummary>(out, Suite::Kitti)?,

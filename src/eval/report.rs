@@ -24,7 +24,7 @@ pub use super::kitti::paper;
 pub use super::output::{load_average, machine, write_section};
 
 /// Rebuilds `OUT/report.md` from the sections present, in suite order, and
-/// adds the choice of defaults when suites 3-5 have all run.
+/// adds the choice of defaults when suites 3-5 have all run (and counts suite 6 when it has).
 pub fn assemble(out: &Path) -> Result<()> {
     let mut s = String::new();
     let _ = writeln!(s, "# lfast evaluation report\n");
