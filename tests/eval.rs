@@ -543,15 +543,25 @@ fn cli_all_quick_on_a_tiny_root() {
     let side = lfast::image::load_gray(out.join("images/continuity_camera.png")).unwrap();
     assert_eq!((side.width, side.height), (3 * 120 + 8, 96));
     // kitti: 2 frames x 7 detectors
-    assert_eq!(csv_rows(&out.join("kitti.csv")).len(), 1 + 2 * 7);
-    // vo: the four L-FAST variants, FAST-9, ORB
+    assert_eq!(csv_rows(&out.join("kitti.csv")).len(), 1 + 2 * 10);
+    // vo: the six L-FAST variants, FAST-9, ORB, ORB-SLAM
     let vo = csv_rows(&out.join("vo.csv"));
     assert_eq!(
         vo.iter().skip(1).map(|r| r[0].as_str()).collect::<Vec<_>>(),
-        ["lfast-paper-s3", "lfast-paper-s4", "lfast-branch-s3", "lfast-branch-s4", "fast9", "orb"]
+        [
+            "lfast-paper-s3",
+            "lfast-paper-s4",
+            "lfast-branch-s3",
+            "lfast-branch-s4",
+            "lfast-paper-s3-snap1",
+            "lfast-branch-s3-snap1",
+            "fast9",
+            "orb",
+            "orbslam"
+        ]
     );
-    // illumination: (2 standard + 2 KITTI) x 4 changes x (2 edge + 5 keypoint methods)
-    assert_eq!(csv_rows(&out.join("illumination.csv")).len(), 1 + 4 * 4 * 7);
+    // illumination: (2 standard + 2 KITTI) x 4 changes x (2 edge + 8 keypoint methods)
+    assert_eq!(csv_rows(&out.join("illumination.csv")).len(), 1 + 4 * 4 * 10);
     let page = std::fs::read_to_string(&doc).unwrap();
     assert!(
         page.contains("# Evaluation") && page.contains("## Choice of defaults") && page.contains("PSNR = 10 log10")
