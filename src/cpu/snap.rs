@@ -21,12 +21,17 @@ use crate::image::Plane;
 ///
 /// ```
 /// use lfast::{Plane, cpu::{select::Corner, snap::snap}};
-/// // a bright quadrant x >= 10, y >= 10: the Harris maximum is near (10, 10)
-/// let img = Plane::from_vec(21, 21, (0..441).map(|i| if i % 21 >= 10 && i / 21 >= 10 { 200 } else { 20 }).collect()).unwrap();
-/// let c = Corner { level: 0, x: 12, y: 10, response: 0.0 };
+/// // a bright square [10, 31)^2: its corner's Harris maximum lies inside, near (12, 12)
+/// let img = Plane::from_vec(41, 41, (0..41 * 41).map(|i| {
+///     let (x, y) = (i % 41, i / 41);
+///     if (10..31).contains(&x) && (10..31).contains(&y) { 200 } else { 20 }
+/// }).collect()).unwrap();
+/// // a corner found on the top edge, 4 px right of the square's corner
+/// let c = Corner { level: 0, x: 14, y: 10, response: 0.0 };
 /// let moved = snap(&img, None, c, 2, 7);
-/// assert!(moved.x < 12 && moved.response > lfast::cpu::response::harris(&img, 12, 10));
-/// assert_eq!(snap(&img, None, c, 0, 7), Corner { response: lfast::cpu::response::harris(&img, 12, 10), ..c });
+/// assert!(moved.x < 14 && moved.y > 10);
+/// assert!(moved.response > lfast::cpu::response::harris(&img, 14, 10));
+/// assert_eq!(snap(&img, None, c, 0, 7), Corner { response: lfast::cpu::response::harris(&img, 14, 10), ..c });
 /// ```
 pub fn snap(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32, border: u32) -> Corner {
     let (x0, y0) = (c.x.saturating_sub(s).max(border), c.y.saturating_sub(s).max(border));
