@@ -51,9 +51,37 @@ fn bench_image(c: &mut Criterion, group: &str, img: &Plane<u8>) {
     g.finish();
 }
 
+/// `detect_and_compute` of the L-FAST variants docs/quality.md compares, and
+/// the ORB-SLAM baseline, in one run (`cargo bench --bench cpu -- variants`).
+fn bench_variants(c: &mut Criterion, img: &Plane<u8>) {
+    use lfast::Mode;
+    use lfast::baseline::orbslam::{OrbSlamDetector, OrbSlamParams};
+    let d = Config::default();
+    let variants = [
+        ("default", d.clone()),
+        ("branch_s4", Config { mode: Mode::Branch, support: 4, snap_radius: 0, ..d.clone() }),
+        ("paper_s3_snap1", Config { mode: Mode::Paper, support: 3, snap_radius: 1, ..d.clone() }),
+        ("branch_s3", Config { mode: Mode::Branch, support: 3, snap_radius: 0, ..d.clone() }),
+        ("branch_s3_snap1", Config { mode: Mode::Branch, support: 3, snap_radius: 1, ..d.clone() }),
+        ("paper_s3", Config { mode: Mode::Paper, support: 3, snap_radius: 0, ..d.clone() }),
+    ];
+    let mut g = c.benchmark_group(format!("variants_{}x{}", img.width, img.height));
+    g.sample_size(20).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(3));
+    for (name, cfg) in variants {
+        let det = CpuDetector::new(cfg).expect("valid config");
+        g.bench_function(format!("detect_and_compute_{name}"), |b| {
+            b.iter(|| det.detect_and_compute(black_box(img.view()), None).unwrap())
+        });
+    }
+    let slam = OrbSlamDetector::new(OrbSlamParams { n_features: 2000, ..Default::default() }).expect("valid params");
+    g.bench_function("baseline_orbslam2000", |b| b.iter(|| slam.detect_and_compute(black_box(img.view())).unwrap()));
+    g.finish();
+}
+
 fn cpu(c: &mut Criterion) {
     if let Some(img) = load(KITTI) {
         bench_image(c, "kitti_seq01_000020", &img);
+        bench_variants(c, &img);
     }
     let img = load(CAMERA).expect("the bundled test image is part of the repository");
     bench_image(c, "camera", &img);

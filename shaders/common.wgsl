@@ -39,7 +39,7 @@ struct Params {
     total_tiles: u32,
     tile_row: u32,      // workgroups per row of the tile list (the device's limit)
     cells: u32,         // offset in `grid` of the SPEC 5 cells (FrameLayout::grid_data)
-    _pad: u32,
+    snap_radius: u32,   // corners move to the Harris maximum within this radius (snap.wgsl)
 }
 
 @group(0) @binding(0) var<uniform> P: Params;

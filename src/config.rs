@@ -91,6 +91,11 @@ pub struct Config {
     pub orientation_bins: u32,
     /// The descriptor: `lfast` (default) or `opencv` (equal to cv2 ORB's).
     pub descriptor: DescriptorKind,
+    /// Beyond the paper: each corner that survives corner NMS moves to the
+    /// Harris maximum within this many pixels (0 = stays on its edge pixel),
+    /// 0..=16; at most `nms_radius / 2` is used ([`Config::snap`]), which keeps
+    /// positions distinct (docs/quality.md).
+    pub snap_radius: u32,
 }
 
 /// Denominator of the rational `delta` (SPEC 1): `delta_num = round(delta * DELTA_DEN)`.
@@ -101,8 +106,8 @@ impl Default for Config {
         Self {
             delta: 0.1,
             alpha_pct: 35,
-            mode: Mode::Branch,
-            support: 4,
+            mode: Mode::Paper,
+            support: 3,
             straight_tol: 1,
             border: 16,
             nms_radius: 3,
@@ -112,6 +117,7 @@ impl Default for Config {
             distribution: false,
             orientation_bins: 30,
             descriptor: DescriptorKind::Lfast,
+            snap_radius: 1,
         }
     }
 }
@@ -171,6 +177,9 @@ impl Config {
         if !self.scale_factor.is_finite() || self.scale_factor <= 1.0 || self.scale_factor > 4.0 {
             return Err(bad("scale_factor", format!("must be a finite number in (1, 4], got {}", self.scale_factor)));
         }
+        if self.snap_radius > 16 {
+            return Err(bad("snap_radius", format!("must be 0..=16, got {}", self.snap_radius)));
+        }
         if self.orientation_bins > 360 {
             return Err(bad(
                 "orientation_bins",
@@ -178,6 +187,30 @@ impl Config {
             ));
         }
         Ok(())
+    }
+
+    /// The paper's pipeline literally (SPEC 1-10 as written): `mode = "paper"`,
+    /// `support = 4` ("more than three" neighbours), no snap, the other fields
+    /// at their defaults. Its output does not move when the defaults do.
+    ///
+    /// ```
+    /// let p = lfast::Config::paper();
+    /// assert_eq!((p.mode, p.support, p.snap_radius), (lfast::Mode::Paper, 4, 0));
+    /// ```
+    pub fn paper() -> Self {
+        Self { mode: Mode::Paper, support: 4, snap_radius: 0, ..Self::default() }
+    }
+
+    /// The snap radius the pipeline uses: `min(snap_radius, nms_radius / 2)`.
+    /// Survivors of corner NMS are more than `nms_radius` apart (Chebyshev),
+    /// so corners moved by at most half of it cannot meet.
+    ///
+    /// ```
+    /// let c = lfast::Config { snap_radius: 2, nms_radius: 3, ..Default::default() };
+    /// assert_eq!(c.snap(), 1);
+    /// ```
+    pub fn snap(&self) -> u32 {
+        self.snap_radius.min(self.nms_radius / 2)
     }
 
     /// Numerator of the rational delta over [`DELTA_DEN`].

@@ -6,6 +6,7 @@
 
 use crate::baseline::fast::fast9_and_compute;
 use crate::baseline::orb::{OrbDetector, OrbParams};
+use crate::baseline::orbslam::{OrbSlamDetector, OrbSlamParams};
 use crate::config::Config;
 use crate::cpu::CpuDetector;
 use crate::detector::{Backend, Detector};
@@ -23,11 +24,13 @@ pub enum FrontEnd {
     Fast,
     /// The ORB baseline (FAST-9 + Harris over the pyramid), as cv2.ORB_create
     Orb,
+    /// ORB-SLAM's extractor: FAST in ~30 px cells (threshold 20, retry 7), per-level quotas, quadtree
+    Orbslam,
 }
 
 impl FrontEnd {
-    /// All three, in the order of the paper's tables.
-    pub const ALL: [FrontEnd; 3] = [FrontEnd::Lfast, FrontEnd::Fast, FrontEnd::Orb];
+    /// Every front end, in the order of the paper's tables, the paper's comparator last.
+    pub const ALL: [FrontEnd; 4] = [FrontEnd::Lfast, FrontEnd::Fast, FrontEnd::Orb, FrontEnd::Orbslam];
 
     /// The name on the command line and in reports.
     pub fn name(self) -> &'static str {
@@ -35,6 +38,7 @@ impl FrontEnd {
             FrontEnd::Lfast => "lfast",
             FrontEnd::Fast => "fast",
             FrontEnd::Orb => "orb",
+            FrontEnd::Orbslam => "orbslam",
         }
     }
 }
@@ -66,6 +70,23 @@ pub fn orb_params(cfg: &Config, fast_threshold: i32, default_features: u32) -> O
     }
 }
 
+/// The ORB-SLAM baseline's parameters under an L-FAST config: its pyramid,
+/// and the cap `n_features` (or `default_features` when the config has none).
+/// Its FAST thresholds are its own (20, retry 7); the descriptor angle is continuous.
+///
+/// ```
+/// let p = lfast::frontend::orbslam_params(&lfast::Config::default(), 1000);
+/// assert_eq!((p.n_features, p.ini_th_fast, p.min_th_fast), (1000, 20, 7));
+/// ```
+pub fn orbslam_params(cfg: &Config, default_features: u32) -> OrbSlamParams {
+    OrbSlamParams {
+        n_features: if cfg.n_features > 0 { cfg.n_features } else { default_features },
+        n_levels: cfg.n_levels,
+        scale_factor: cfg.scale_factor,
+        ..OrbSlamParams::default()
+    }
+}
+
 /// A front end ready to run.
 #[derive(Debug)]
 pub enum Features {
@@ -82,6 +103,8 @@ pub enum Features {
     },
     /// The ORB baseline.
     Orb(OrbDetector),
+    /// The ORB-SLAM baseline.
+    OrbSlam(OrbSlamDetector),
 }
 
 impl Features {
@@ -99,6 +122,7 @@ impl Features {
                 Features::Fast { cap: cfg.n_features, threshold: fast_threshold, describe: CpuDetector::new(cfg)? }
             }
             FrontEnd::Orb => Features::Orb(OrbDetector::new(orb_params(&cfg, fast_threshold, orb_features))?),
+            FrontEnd::Orbslam => Features::OrbSlam(OrbSlamDetector::new(orbslam_params(&cfg, orb_features))?),
         })
     }
 
@@ -108,6 +132,7 @@ impl Features {
             Features::Lfast(_) => FrontEnd::Lfast,
             Features::Fast { .. } => FrontEnd::Fast,
             Features::Orb(_) => FrontEnd::Orb,
+            Features::OrbSlam(_) => FrontEnd::Orbslam,
         }
     }
 
@@ -124,6 +149,7 @@ impl Features {
         match self {
             Features::Lfast(d) => d.detect_and_compute(img.view(), None),
             Features::Orb(d) => d.detect_and_compute(img.view()),
+            Features::OrbSlam(d) => d.detect_and_compute(img.view()),
             Features::Fast { describe, threshold, cap } => fast9_and_compute(img, *threshold, *cap, describe),
         }
     }

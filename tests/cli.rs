@@ -69,15 +69,16 @@ fn detect_mode_and_options_are_honoured() {
         assert_ok(&o);
         read_features(&out.join("coins.json"))
     };
-    let branch = count("branch", &[]);
-    let paper = count("paper", &[&"--mode", &"paper"]);
+    // the default mode is paper (docs/evaluation.md): --mode branch must change the output
+    let default = count("default", &[]);
+    let branch = count("branch", &[&"--mode", &"branch"]);
     let g = lfast::image::load_gray(&img).unwrap();
-    let lib_paper = lfast::cpu::CpuDetector::new(lfast::Config { mode: lfast::Mode::Paper, ..Default::default() })
+    let lib_branch = lfast::cpu::CpuDetector::new(lfast::Config { mode: lfast::Mode::Branch, ..Default::default() })
         .unwrap()
         .detect(g.view(), None)
         .unwrap();
-    assert_eq!(paper.keypoints, lib_paper);
-    assert_ne!(paper.keypoints.len(), branch.keypoints.len(), "--mode paper made no difference");
+    assert_eq!(branch.keypoints, lib_branch);
+    assert_ne!(default.keypoints.len(), branch.keypoints.len(), "--mode branch made no difference");
 
     let capped = count("capped", &[&"--n-features", &"25"]);
     assert_eq!(capped.keypoints.len(), 25);
@@ -86,10 +87,10 @@ fn detect_mode_and_options_are_honoured() {
 
     // a config file, and a command-line option over it
     let cfg = dir.path().join("cfg.toml");
-    std::fs::write(&cfg, "n_features = 10\nmode = \"paper\"\n").unwrap();
+    std::fs::write(&cfg, "n_features = 10\nmode = \"branch\"\n").unwrap();
     let from_file = count("file", &[&"--config", &cfg]);
     assert!(from_file.keypoints.len() <= 10 && !from_file.keypoints.is_empty(), "{}", from_file.keypoints.len());
-    assert!(from_file.keypoints.iter().all(|k| lib_paper.contains(k)), "the config's mode = paper was not used");
+    assert!(from_file.keypoints.iter().all(|k| lib_branch.contains(k)), "the config's mode = branch was not used");
     let overridden = count("over", &[&"--config", &cfg, &"--n-features", &"3"]);
     assert_eq!(overridden.keypoints.len(), 3);
 }

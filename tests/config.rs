@@ -8,8 +8,10 @@ fn defaults_are_the_spec_values() {
     let c = Config::default();
     assert_eq!(c.delta, 0.1);
     assert_eq!(c.alpha_pct, 35);
-    assert_eq!(c.mode, Mode::Branch);
-    assert_eq!(c.support, 4);
+    // mode, support and snap_radius as the evaluation chose them (docs/evaluation.md)
+    assert_eq!(c.mode, Mode::Paper);
+    assert_eq!(c.support, 3);
+    assert_eq!(c.snap_radius, 1);
     assert_eq!(c.straight_tol, 1);
     assert_eq!(c.border, 16);
     assert_eq!(c.nms_radius, 3);
@@ -32,7 +34,7 @@ fn toml_round_trip() {
     let c = Config {
         delta: 0.25,
         alpha_pct: 20,
-        mode: Mode::Paper,
+        mode: Mode::Branch,
         support: 5,
         straight_tol: 2,
         border: 20,
@@ -43,10 +45,11 @@ fn toml_round_trip() {
         distribution: true,
         orientation_bins: 0,
         descriptor: DescriptorKind::Opencv,
+        snap_radius: 0,
     };
     c.validate().unwrap();
     let text = c.to_toml_string();
-    assert!(text.contains("mode = \"paper\""), "{text}");
+    assert!(text.contains("mode = \"branch\""), "{text}");
     assert_eq!(Config::from_toml_str(&text).unwrap(), c, "{text}");
 
     // through a file too
@@ -110,6 +113,7 @@ fn invalid_values_name_their_field() {
         ("straight_tol", Config { straight_tol: 8, ..d() }, "straight_tol = 8"),
         ("nms_radius", Config { nms_radius: 33, ..d() }, "nms_radius = 33"),
         ("orientation_bins", Config { orientation_bins: 361, ..d() }, "orientation_bins = 361"),
+        ("snap_radius", Config { snap_radius: 17, ..d() }, "snap_radius = 17"),
     ];
     for (field, cfg, toml) in cases {
         let e = cfg.validate().unwrap_err();

@@ -327,6 +327,7 @@ fn candidate(v: lfast::eval::Variant, score: f64, points: f64) -> lfast::eval::r
         ms_budget: score,
         survival: score,
         vo_ate: None,
+        vo_rel: None,
     }
 }
 
@@ -334,8 +335,7 @@ fn candidate(v: lfast::eval::Variant, score: f64, points: f64) -> lfast::eval::r
 fn choice_of_defaults_rule() {
     use lfast::eval::Variant;
     use lfast::eval::report::choose;
-    let d = lfast::Config::default();
-    let current = Variant { mode: d.mode, support: d.support };
+    let current = Variant::current();
     let others: Vec<Variant> = Variant::ALL.into_iter().filter(|&v| v != current).collect();
     let (a, b, c) = (others[0], others[1], others[2]);
     // a scores best; b is within 0.01 of it with fewer points; the default trails by 0.06: b
@@ -357,6 +357,27 @@ fn choice_of_defaults_rule() {
     let cands = vec![candidate(current, 0.40, 1000.0), candidate(a, 0.46, 2400.0), candidate(b, 0.44, 100.0)];
     assert_eq!(choose(cands, String::new()).unwrap().chosen, a);
     assert!(choose(vec![], String::new()).is_none());
+}
+
+#[test]
+fn choice_of_defaults_counts_the_trajectory() {
+    use lfast::eval::Variant;
+    use lfast::eval::report::choose;
+    let current = Variant::current();
+    let a = Variant::ALL.into_iter().find(|&v| v != current).unwrap();
+    let with_ate = |v, s, ate| lfast::eval::report::Candidate { vo_ate: Some(ate), ..candidate(v, s, 1000.0) };
+    // a leads by 0.02 on the image suites, but its trajectory is twice as far off:
+    // (0.46 * 3 + 0.5) / 4 = 0.47 against (0.44 * 3 + 1) / 4 = 0.58
+    let dec = choose(vec![with_ate(current, 0.44, 0.05), with_ate(a, 0.46, 0.10)], String::new()).unwrap();
+    assert_eq!((dec.best, dec.chosen), (current, current));
+    let c = &dec.candidates;
+    assert_eq!((c[0].vo_rel, c[1].vo_rel), (Some(1.0), Some(0.5)));
+    assert!((c[1].score() - 0.47).abs() < 1e-12, "{}", c[1].score());
+    // without the ATE of every candidate, the image suites alone decide
+    let dec = choose(vec![with_ate(current, 0.44, 0.05), candidate(a, 0.46, 1000.0)], String::new()).unwrap();
+    assert_eq!(dec.chosen, a);
+    assert!(dec.candidates.iter().all(|c| c.vo_rel.is_none()));
+    assert!(dec.table().contains("not scored"));
 }
 
 // ---------------------------------------------------------- the CLI, end to end
@@ -451,9 +472,19 @@ fn cli_repeatability_on_a_shifted_scene() {
             .find(|r| r[col("pair")] == pair && r[col("detector")] == det && r[col("budget")] == budget)
             .unwrap_or_else(|| panic!("no row {pair} {det} {budget}"))
     };
-    // 6 detectors x 3 budgets x 2 pairs
-    assert_eq!(rows.len(), 1 + 6 * 3 * 2);
-    for det in ["fast9", "orb", "lfast-paper-s3", "lfast-paper-s4", "lfast-branch-s3", "lfast-branch-s4"] {
+    // 9 detectors x 3 budgets x 2 pairs
+    assert_eq!(rows.len(), 1 + 9 * 3 * 2);
+    for det in [
+        "fast9",
+        "orb",
+        "orbslam",
+        "lfast-paper-s3",
+        "lfast-paper-s4",
+        "lfast-branch-s3",
+        "lfast-branch-s4",
+        "lfast-paper-s3-snap1",
+        "lfast-branch-s3-snap1",
+    ] {
         // img3 is img1: every detector repeats and matches every keypoint
         let r = get("1-3", det, "all");
         assert!(r[col("n1")].parse::<usize>().unwrap() > 0, "{det}: no keypoints");
@@ -482,7 +513,7 @@ fn cli_all_quick_on_a_tiny_root() {
         "## 4. Repeatability",
         "## 5. Illumination",
         "## 6. Visual odometry",
-        "## Choice of defaults (from suites 3-5)",
+        "## Choice of defaults (from suites 3-6)",
     ] {
         assert!(report.contains(h), "missing {h}");
     }
@@ -512,15 +543,25 @@ fn cli_all_quick_on_a_tiny_root() {
     let side = lfast::image::load_gray(out.join("images/continuity_camera.png")).unwrap();
     assert_eq!((side.width, side.height), (3 * 120 + 8, 96));
     // kitti: 2 frames x 7 detectors
-    assert_eq!(csv_rows(&out.join("kitti.csv")).len(), 1 + 2 * 7);
-    // vo: the four L-FAST variants, FAST-9, ORB
+    assert_eq!(csv_rows(&out.join("kitti.csv")).len(), 1 + 2 * 10);
+    // vo: the six L-FAST variants, FAST-9, ORB, ORB-SLAM
     let vo = csv_rows(&out.join("vo.csv"));
     assert_eq!(
         vo.iter().skip(1).map(|r| r[0].as_str()).collect::<Vec<_>>(),
-        ["lfast-paper-s3", "lfast-paper-s4", "lfast-branch-s3", "lfast-branch-s4", "fast9", "orb"]
+        [
+            "lfast-paper-s3",
+            "lfast-paper-s4",
+            "lfast-branch-s3",
+            "lfast-branch-s4",
+            "lfast-paper-s3-snap1",
+            "lfast-branch-s3-snap1",
+            "fast9",
+            "orb",
+            "orbslam"
+        ]
     );
-    // illumination: (2 standard + 2 KITTI) x 4 changes x (2 edge + 5 keypoint methods)
-    assert_eq!(csv_rows(&out.join("illumination.csv")).len(), 1 + 4 * 4 * 7);
+    // illumination: (2 standard + 2 KITTI) x 4 changes x (2 edge + 8 keypoint methods)
+    assert_eq!(csv_rows(&out.join("illumination.csv")).len(), 1 + 4 * 4 * 10);
     let page = std::fs::read_to_string(&doc).unwrap();
     assert!(
         page.contains("# Evaluation") && page.contains("## Choice of defaults") && page.contains("PSNR = 10 log10")
@@ -568,10 +609,10 @@ fn cli_quick_suites_on_the_shared_data() {
     let k = csv_rows(&out.join("kitti.csv"));
     let fast0 = k.iter().find(|r| r[0] == "000000" && r[1] == "fast9").unwrap();
     assert_eq!(fast0[2], "3716");
-    assert_eq!(k.len(), 1 + 3 * 7, "3 frames x 7 detectors");
-    // one pair of boat, 6 detectors x 3 budgets; every score a fraction
+    assert_eq!(k.len(), 1 + 3 * 10, "3 frames x 10 detectors");
+    // one pair of boat, 9 detectors x 3 budgets; every score a fraction
     let r = csv_rows(&out.join("repeatability.csv"));
-    assert_eq!(r.len(), 1 + 18);
+    assert_eq!(r.len(), 1 + 27);
     for row in &r[1..] {
         let rep: f64 = row[9].parse().unwrap();
         assert!((0.0..=1.0).contains(&rep) && row[1] == "1-2", "{row:?}");

@@ -146,6 +146,44 @@ fn masks_and_caps_equal_the_cpu() {
 }
 
 #[test]
+fn snapped_corners_equal_the_cpu() {
+    let Some(ctx) = t::context() else { return };
+    let astronaut = load_gray(common::data("astronaut_256.png")).unwrap();
+    let mut mask = Plane::<u8>::new(astronaut.width, astronaut.height);
+    for (i, m) in mask.data.iter_mut().enumerate() {
+        *m = ((i as u32 % astronaut.width) > 70) as u8;
+    }
+    for (nms_radius, snap_radius, n_features, mode) in
+        [(3, 1, 0, Mode::Branch), (4, 2, 0, Mode::Paper), (2, 1, 100, Mode::Branch)]
+    {
+        let cfg = Config { nms_radius, snap_radius, n_features, mode, support: 3, ..Config::default() };
+        let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
+        let cpu = CpuDetector::new(cfg).unwrap();
+        let unsnapped = CpuDetector::new(Config { snap_radius: 0, ..cpu.config().clone() }).unwrap();
+        let mut ws = None;
+        for (name, img) in golden_images() {
+            for m in [None, Some(mask.view())] {
+                if m.is_some() && (img.width, img.height) != (mask.width, mask.height) {
+                    continue;
+                }
+                let what =
+                    format!("{name}, nms {nms_radius}, snap {snap_radius}, cap {n_features}, mask {}", m.is_some());
+                let g = gpu.detect_and_compute(&mut ws, img.view(), m).unwrap();
+                let c = cpu.detect_and_compute(img.view(), m).unwrap();
+                assert_same(&what, &g, &c);
+                // the snap moved some corners (else this test would check nothing new)
+                let before = unsnapped.detect(img.view(), m).unwrap();
+                let at = |k: &KeyPoint| (k.octave, k.pt.x.to_bits(), k.pt.y.to_bits());
+                let old: std::collections::HashSet<_> = before.iter().map(at).collect();
+                let moved = c.0.iter().filter(|k| !old.contains(&at(k))).count();
+                assert!(moved > 0 || c.0.is_empty(), "{what}: nothing moved");
+                eprintln!("{what}: {} keypoints, {moved} not at an unsnapped position, identical", c.0.len());
+            }
+        }
+    }
+}
+
+#[test]
 fn texture_input_equals_gray_input() {
     let Some(ctx) = t::context() else { return };
     let rgb = image::open(common::data("astronaut_256.png")).unwrap().to_rgba8();

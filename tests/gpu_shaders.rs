@@ -16,7 +16,7 @@ fn module(name: &str, source: &str) -> naga::Module {
 
 #[test]
 fn every_shader_validates_and_has_an_entry_point() {
-    assert_eq!(SHADERS.len(), 21);
+    assert_eq!(SHADERS.len(), 22);
     for s in SHADERS {
         let m = module(s.name, s.source);
         assert!(

@@ -100,6 +100,9 @@ pub struct LfastConfig {
     pub orientation_bins: u32,
     /// An `LfastDescriptorKind` value.
     pub descriptor: i32,
+    /// Beyond the paper: each corner moves to the Harris maximum within this many
+    /// pixels (0 = stays on its edge pixel), 0..=16; at most `nms_radius / 2` is used.
+    pub snap_radius: u32,
 }
 
 impl From<&Config> for LfastConfig {
@@ -124,6 +127,7 @@ impl From<&Config> for LfastConfig {
                 DescriptorKind::Lfast => LfastDescriptorKind::Lfast as i32,
                 DescriptorKind::Opencv => LfastDescriptorKind::Opencv as i32,
             },
+            snap_radius: c.snap_radius,
         }
     }
 }
@@ -164,6 +168,7 @@ impl LfastConfig {
             distribution: self.distribution,
             orientation_bins: self.orientation_bins,
             descriptor,
+            snap_radius: self.snap_radius,
         };
         cfg.validate()?;
         Ok(cfg)

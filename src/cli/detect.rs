@@ -71,7 +71,7 @@ pub(super) struct DetectArgs {
     /// Detector
     #[arg(long, value_enum, default_value_t = FrontEnd::Lfast)]
     detector: FrontEnd,
-    /// FAST threshold of --detector fast and orb
+    /// FAST threshold of --detector fast and orb (orbslam has its own: 20, retry 7)
     #[arg(long, default_value_t = 20)]
     fast_threshold: i32,
     #[command(flatten)]

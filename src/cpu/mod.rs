@@ -26,6 +26,7 @@ pub mod response;
 pub mod rules;
 pub mod select;
 pub(crate) mod simd;
+pub mod snap;
 
 use crate::config::{Config, DELTA_DEN, DescriptorKind};
 use crate::error::{Error, Result};
@@ -416,10 +417,16 @@ impl CpuDetector {
             fused::edges_fused_into(img.view(), self.cfg.delta_num(), DELTA_DEN, self.cfg.alpha_pct, em);
             let cands = lfast::lfast(&em.edges, masks.as_ref().map(|m| &m[l]), &params);
             let resp = response::responses(&em.denoised, &cands);
-            corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
-                .into_iter()
-                .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] })
-                .collect()
+            let mut kept: Vec<Corner> =
+                corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
+                    .into_iter()
+                    .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] })
+                    .collect();
+            if self.cfg.snap() > 0 {
+                let m = masks.as_ref().map(|m| &m[l]);
+                snap::snap_all(&em.denoised, m, &mut kept, self.cfg.snap(), params.border);
+            }
+            kept
         };
         // Level 0 needs no resizing: detect on it while levels 1.. are built
         // (each from the one before) and then detected on.

@@ -1,5 +1,5 @@
-//! The choice of defaults from suites 3-5 (and the VO ATE of suite 6, shown
-//! not scored): the candidates' numbers, the rule ([`choose`]) and its report section.
+//! The choice of defaults from suites 3-6: the candidates' numbers, the rule
+//! ([`choose`]) and its report section.
 
 use super::format::{num, pct, table};
 use super::illumination::IllumSummary;
@@ -7,7 +7,6 @@ use super::kitti::KittiSummary;
 use super::output::read_summary;
 use super::repeatability::RepeatSummary;
 use super::{Result, Suite, Variant, mode_name};
-use crate::config::Config;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -34,19 +33,52 @@ pub struct Candidate {
     pub ms_budget: f64,
     /// Keypoint survival, mean over the four changes.
     pub survival: f64,
-    /// Visual-odometry ATE RMSE (SE(3)), metres, when suite 6 ran (shown, not scored).
+    /// Visual-odometry ATE RMSE (SE(3)), metres, when suite 6 ran.
     pub vo_ate: Option<f64>,
+    /// The smallest ATE of all candidates over this one's (1 for the best
+    /// trajectory, towards 0 for worse ones); set by [`choose`] when every
+    /// candidate has an ATE.
+    pub vo_rel: Option<f64>,
 }
 
 impl Candidate {
-    /// The score: the mean of repeatability and matching score at the budget
-    /// and the illumination survival (all fractions, higher is better).
+    /// The score: the mean of repeatability and matching score at the budget,
+    /// the illumination survival and, when suite 6 ran for every candidate,
+    /// the relative trajectory accuracy [`vo_rel`](Self::vo_rel) (all
+    /// fractions, higher is better).
     pub fn score(&self) -> f64 {
-        (self.rep_budget + self.ms_budget + self.survival) / 3.0
+        match self.vo_rel {
+            Some(v) => (self.rep_budget + self.ms_budget + self.survival + v) / 4.0,
+            None => (self.rep_budget + self.ms_budget + self.survival) / 3.0,
+        }
     }
 }
 
-/// The choice of defaults made from suites 3-5.
+/// Sets every candidate's [`Candidate::vo_rel`] = smallest ATE / its ATE when
+/// every candidate has a finite positive ATE; otherwise clears them all.
+///
+/// ```
+/// use lfast::eval::decision::{Candidate, relative_ate};
+/// use lfast::eval::Variant;
+/// let c = |ate| Candidate { variant: Variant::ALL[0], kitti_points: 0.0, kitti_ms: 0.0, rep_all: 0.0,
+///     rep_budget: 0.0, ms_budget: 0.0, survival: 0.0, vo_ate: ate, vo_rel: None };
+/// let mut cs = vec![c(Some(0.05)), c(Some(0.1))];
+/// relative_ate(&mut cs);
+/// assert_eq!((cs[0].vo_rel, cs[1].vo_rel), (Some(1.0), Some(0.5)));
+/// let mut cs = vec![c(Some(0.05)), c(None)];
+/// relative_ate(&mut cs);
+/// assert!(cs.iter().all(|c| c.vo_rel.is_none()));
+/// ```
+pub fn relative_ate(candidates: &mut [Candidate]) {
+    let ok = |a: Option<f64>| a.is_some_and(|a| a.is_finite() && a > 0.0);
+    let all = !candidates.is_empty() && candidates.iter().all(|c| ok(c.vo_ate));
+    let best = candidates.iter().filter_map(|c| c.vo_ate).fold(f64::INFINITY, f64::min);
+    for c in candidates.iter_mut() {
+        c.vo_rel = if all { c.vo_ate.map(|a| best / a) } else { None };
+    }
+}
+
+/// The choice of defaults made from suites 3-6.
 #[derive(Clone, Debug)]
 pub struct Decision {
     /// Every candidate, in [`Variant::ALL`] order.
@@ -67,11 +99,11 @@ pub struct Decision {
 /// the best. Otherwise the choice is, among the candidates within the margin
 /// of the best, the one with the fewest KITTI keypoints per frame (the
 /// paper's aim: fewer points of the same quality), ties to the higher score.
-pub fn choose(candidates: Vec<Candidate>, basis: String) -> Option<Decision> {
+pub fn choose(mut candidates: Vec<Candidate>, basis: String) -> Option<Decision> {
+    relative_ate(&mut candidates);
     let best = candidates.iter().max_by(|a, b| a.score().total_cmp(&b.score()))?;
     let (best_variant, best_score) = (best.variant, best.score());
-    let d = Config::default();
-    let current = Variant { mode: d.mode, support: d.support };
+    let current = Variant::current();
     let current_score = candidates.iter().find(|c| c.variant == current).map(Candidate::score);
     let chosen = match current_score {
         Some(cur) if best_score - cur <= DECISION_MARGIN => current,
@@ -84,7 +116,7 @@ pub fn choose(candidates: Vec<Candidate>, basis: String) -> Option<Decision> {
     Some(Decision { candidates, best: best_variant, current, chosen, basis })
 }
 
-/// The decision from the summaries in `out`; `None` when one of suites 3-5 is missing.
+/// The decision from the summaries in `out` (suite 6 counts when it ran); `None` when one of suites 3-5 is missing.
 pub fn decide(out: &Path) -> Result<Option<Decision>> {
     let (Some(k), Some(r), Some(i)) = (
         read_summary::<KittiSummary>(out, Suite::Kitti)?,
@@ -114,6 +146,7 @@ pub fn decide(out: &Path) -> Result<Option<Decision>> {
             ms_budget: b.matching_score,
             survival: super::mean(surv),
             vo_ate: vo.as_ref().and_then(|s| s.rows.iter().find(|row| row.key == key)).and_then(|row| row.ate_rmse),
+            vo_rel: None,
         });
     }
     let basis = format!(
@@ -129,7 +162,11 @@ pub fn decide(out: &Path) -> Result<Option<Decision>> {
 }
 
 fn variant_label(v: Variant) -> String {
-    format!("{} / support {}", mode_name(v.mode), v.support)
+    if v.snap > 0 {
+        format!("{} / support {} / snap {}", mode_name(v.mode), v.support, v.snap)
+    } else {
+        format!("{} / support {}", mode_name(v.mode), v.support)
+    }
 }
 
 impl Decision {
@@ -153,12 +190,13 @@ impl Decision {
                     pct(c.survival),
                     num(c.score(), 3),
                     c.vo_ate.map_or("–".into(), |v| num(v, 3)),
+                    c.vo_rel.map_or("not scored".into(), |v| num(v, 3)),
                 ]
             })
             .collect();
         table(
             &[
-                "L-FAST mode / support",
+                "L-FAST mode / support / snap",
                 "KITTI points/frame",
                 "KITTI ms/frame",
                 "repeatability (all)",
@@ -166,7 +204,8 @@ impl Decision {
                 &format!("matching score @{DECISION_BUDGET}"),
                 "keypoint survival",
                 "score",
-                "VO ATE RMSE (m, not scored)",
+                "VO ATE RMSE (m)",
+                "best ATE / ATE",
             ],
             &rows,
         )
@@ -176,7 +215,9 @@ impl Decision {
     pub fn verdict(&self) -> String {
         let score = |v: Variant| self.candidates.iter().find(|c| c.variant == v).map_or(f64::NAN, Candidate::score);
         let points = |v: Variant| self.candidates.iter().find(|c| c.variant == v).map_or(f64::NAN, |c| c.kitti_points);
-        let cfg = |v: Variant| format!("`mode = \"{}\"`, `support = {}`", mode_name(v.mode), v.support);
+        let cfg = |v: Variant| {
+            format!("`mode = \"{}\"`, `support = {}`, `snap_radius = {}`", mode_name(v.mode), v.support, v.snap)
+        };
         let (cur, best, chosen) = (self.current, self.best, self.chosen);
         if chosen == cur && best == cur {
             format!("Keep the current defaults {}: they score best ({}).", cfg(cur), num(score(cur), 3))
@@ -221,17 +262,18 @@ impl Decision {
     /// The report section.
     pub fn markdown(&self) -> String {
         let mut s = String::new();
-        let _ = writeln!(s, "## Choice of defaults (from suites 3-5)\n");
+        let _ = writeln!(s, "## Choice of defaults (from suites 3-6)\n");
         let _ = writeln!(
             s,
-            "Candidates: L-FAST `mode` in {{paper, branch}} x `support` in {{3, 4}}, everything else as \
-             `Config::default()`. Score = mean of repeatability and matching score at a budget of \
-             {DECISION_BUDGET} keypoints (suite 4, every pair of every scene) and keypoint survival (suite \
-             5, every image, the four changes). The current default stays when its score is within \
+            "Candidates: L-FAST `mode` in {{paper, branch}} x `support` in {{3, 4}}, and the two \
+             support-3 ones with `snap_radius = 1` (docs/quality.md), everything else as `Config::default()`. Score = mean of repeatability and matching score at a budget of \
+             {DECISION_BUDGET} keypoints (suite 4, every pair of every scene), keypoint survival (suite \
+             5, every image, the four changes) and, when suite 6 ran for every candidate, the relative \
+             trajectory accuracy: the smallest visual-odometry ATE RMSE (SE(3)) of the candidates over the \
+             candidate's own (1 for the best trajectory). The current default stays when its score is within \
              {DECISION_MARGIN} of the best; otherwise the choice is the candidate with the fewest KITTI \
              keypoints per frame (suite 3; the paper's aim: fewer points of the same quality) among those \
-             within {DECISION_MARGIN} of the best. The visual-odometry ATE (suite 6, when it ran) is shown, \
-             not scored: one trajectory per candidate. Basis: {}.\n",
+             within {DECISION_MARGIN} of the best. Basis: {}.\n",
             self.basis
         );
         s.push_str(&self.table());

@@ -61,7 +61,10 @@ fn observe(img: &Plane<u8>, det: &Detectors, edges: &CpuDetector) -> Result<Obse
         ("improved-canny".to_string(), edges.edge_image(img.view())?),
     ];
     let pos = |kps: &[crate::KeyPoint]| kps.iter().map(|k| [k.pt.x as f64, k.pt.y as f64]).collect::<Vec<_>>();
-    let mut p = vec![("fast9".to_string(), pos(&Detectors::fast9_sorted(img)))];
+    let mut p = vec![
+        ("fast9".to_string(), pos(&Detectors::fast9_sorted(img))),
+        ("orbslam".to_string(), pos(&det.orbslam.detect_and_compute(img.view())?.0)),
+    ];
     for (v, d) in &det.lfast {
         p.push((v.key(), pos(&d.detect(img.view(), None)?)));
     }
@@ -153,6 +156,7 @@ pub fn run(opts: &Options) -> Result<()> {
     let transforms: Vec<String> = Lighting::SUITE.iter().map(Lighting::name).collect();
     let mut keys: Vec<(String, &'static str)> =
         vec![("canny".into(), "edges"), ("improved-canny".into(), "edges"), ("fast9".into(), "keypoints")];
+    keys.push(("orbslam".into(), "keypoints"));
     keys.extend(det.lfast.iter().map(|(v, _)| (v.key(), "keypoints")));
     let select = |source: Option<&str>, key: &str, t: &str| -> Vec<&Row> {
         rows.iter().filter(|r| source.is_none_or(|s| r.source == s) && r.key == key && r.transform == t).collect()
@@ -228,7 +232,7 @@ pub fn run(opts: &Options) -> Result<()> {
         }
     }
     let m = |key: &str| mean(means.iter().filter(|x| x.key == key).map(|x| x.survival));
-    let current = super::Variant { mode: Config::default().mode, support: Config::default().support }.key();
+    let current = super::Variant::current().key();
     let md = format!(
         "## 5. Illumination: what survives a brightness change (the paper's claim, measured)\n\n\
          {n_standard} standard image(s) and {} KITTI frame(s), each changed four ways: gamma 0.5, gamma 2.0, a shadow \

@@ -99,6 +99,8 @@ fn measure(img: &Plane<u8>, det: &Detectors, l0: &CpuDetector, repeats: usize) -
     out.push(Measure { key: "fast9".into(), keypoints: kps.len(), detect_ms, total_ms });
     let ((kps, _), ms) = timed(repeats, || Ok(det.orb.detect_and_compute(v)?))?;
     out.push(Measure { key: "orb".into(), keypoints: kps.len(), detect_ms: ms, total_ms: ms });
+    let ((kps, _), ms) = timed(repeats, || Ok(det.orbslam.detect_and_compute(v)?))?;
+    out.push(Measure { key: "orbslam".into(), keypoints: kps.len(), detect_ms: ms, total_ms: ms });
     let lfast = det.lfast.iter().map(|(var, d)| (var.key(), d)).chain(std::iter::once((LFAST_L0.to_string(), l0)));
     for (key, d) in lfast {
         let (kps, detect_ms) = timed(repeats, || Ok(d.detect(v, None)?))?;
@@ -238,7 +240,7 @@ pub fn run(opts: &Options) -> Result<()> {
         .transpose()?
         .map(|p| format!("{}x{}", p.width, p.height))
         .unwrap_or_default();
-    let current = Variant { mode: Config::default().mode, support: Config::default().support }.key();
+    let current = Variant::current().key();
     let trow: Vec<Vec<String>> = means
         .iter()
         .map(|m| {

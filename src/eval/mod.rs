@@ -38,6 +38,7 @@ pub mod vo;
 
 use crate::baseline::fast::fast9;
 use crate::baseline::orb::{OrbDetector, OrbParams};
+use crate::baseline::orbslam::{OrbSlamDetector, OrbSlamParams};
 use crate::config::{Config, Mode};
 use crate::cpu::CpuDetector;
 use crate::image::Plane;
@@ -167,39 +168,50 @@ impl Options {
     }
 }
 
-/// One L-FAST configuration under evaluation: the two defaults that suites
-/// 3-5 decide between, everything else as `Config::default()`.
+/// One L-FAST configuration under evaluation: the defaults that suites 3-6
+/// decide between, everything else as `Config::default()`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Variant {
     /// SPEC 8 mode.
     pub mode: Mode,
     /// SPEC 8 `support`.
     pub support: u32,
+    /// `Config::snap_radius` (docs/quality.md), 0 = corners stay on their edge pixel.
+    pub snap: u32,
 }
 
 impl Variant {
-    /// The four candidates: {Paper, Branch} x support {3, 4}.
-    pub const ALL: [Variant; 4] = [
-        Variant { mode: Mode::Paper, support: 3 },
-        Variant { mode: Mode::Paper, support: 4 },
-        Variant { mode: Mode::Branch, support: 3 },
-        Variant { mode: Mode::Branch, support: 4 },
+    /// The candidates: {Paper, Branch} x support {3, 4} as the paper's corners,
+    /// and the two support-3 ones with their corners snapped within 1 px.
+    pub const ALL: [Variant; 6] = [
+        Variant { mode: Mode::Paper, support: 3, snap: 0 },
+        Variant { mode: Mode::Paper, support: 4, snap: 0 },
+        Variant { mode: Mode::Branch, support: 3, snap: 0 },
+        Variant { mode: Mode::Branch, support: 4, snap: 0 },
+        Variant { mode: Mode::Paper, support: 3, snap: 1 },
+        Variant { mode: Mode::Branch, support: 3, snap: 1 },
     ];
 
-    /// A stable key for files and JSON, e.g. `lfast-branch-s4`.
-    pub fn key(self) -> String {
-        format!("lfast-{}-s{}", mode_name(self.mode), self.support)
+    /// The variant `Config::default()` is.
+    pub fn current() -> Variant {
+        let d = Config::default();
+        Variant { mode: d.mode, support: d.support, snap: d.snap_radius }
     }
 
-    /// The configuration: the defaults with this mode and support.
+    /// A stable key for files and JSON, e.g. `lfast-branch-s4`, `lfast-branch-s3-snap1`.
+    pub fn key(self) -> String {
+        let snap = if self.snap > 0 { format!("-snap{}", self.snap) } else { String::new() };
+        format!("lfast-{}-s{}{snap}", mode_name(self.mode), self.support)
+    }
+
+    /// The configuration: the defaults with this mode, support and snap radius.
     pub fn config(self) -> Config {
-        Config { mode: self.mode, support: self.support, ..Config::default() }
+        Config { mode: self.mode, support: self.support, snap_radius: self.snap, ..Config::default() }
     }
 
     /// True for the variant `Config::default()` uses now.
     pub fn is_current_default(self) -> bool {
-        let d = Config::default();
-        d.mode == self.mode && d.support == self.support
+        self == Variant::current()
     }
 
     /// The variant with this key.
@@ -231,6 +243,8 @@ pub struct Detectors {
     pub describer: CpuDetector,
     /// ORB as `cv2.ORB_create()` (500 features).
     pub orb: OrbDetector,
+    /// ORB-SLAM's extractor with its settings files' 1000 features.
+    pub orbslam: OrbSlamDetector,
 }
 
 impl Detectors {
@@ -241,6 +255,7 @@ impl Detectors {
             lfast,
             describer: CpuDetector::new(Config::default())?,
             orb: Self::orb_with(OrbParams::default().n_features)?,
+            orbslam: Self::orbslam_with(OrbSlamParams::default().n_features)?,
         })
     }
 
@@ -264,6 +279,15 @@ impl Detectors {
     pub fn orb_with(n: u32) -> Result<OrbDetector> {
         let cfg = Config { n_features: n, ..Config::default() };
         Ok(OrbDetector::new(crate::frontend::orb_params(&cfg, FAST_THRESHOLD, n))?)
+    }
+}
+
+impl Detectors {
+    /// ORB-SLAM's extractor with a budget of `n` features, built as every
+    /// front end builds it ([`crate::frontend::orbslam_params`]).
+    pub fn orbslam_with(n: u32) -> Result<OrbSlamDetector> {
+        let cfg = Config { n_features: n, ..Config::default() };
+        Ok(OrbSlamDetector::new(crate::frontend::orbslam_params(&cfg, n))?)
     }
 }
 
@@ -407,10 +431,12 @@ pub fn label(key: &str) -> String {
     match key {
         "fast9" => "FAST-9".into(),
         "orb" => "ORB".into(),
+        "orbslam" => "ORB-SLAM".into(),
         "canny" => "Canny".into(),
         "improved-canny" => "improved Canny".into(),
         LFAST_L0 => "L-FAST default, level 0".into(),
         k => match Variant::from_key(k) {
+            Some(v) if v.snap > 0 => format!("L-FAST {} s{} snap{}", mode_name(v.mode), v.support, v.snap),
             Some(v) => format!("L-FAST {} s{}", mode_name(v.mode), v.support),
             None => k.into(),
         },
@@ -422,12 +448,15 @@ pub fn colour_of(key: &str) -> usize {
     match key {
         "fast9" | "canny" => 3,
         "orb" => 1,
+        "orbslam" => 5,
         "improved-canny" => 0,
         LFAST_L0 => 9,
         "lfast-paper-s3" => 4,
         "lfast-paper-s4" => 6,
         "lfast-branch-s3" => 2,
         "lfast-branch-s4" => 0,
+        "lfast-paper-s3-snap1" => 8,
+        "lfast-branch-s3-snap1" => 10,
         _ => 7,
     }
 }

@@ -149,7 +149,11 @@ fn detect_all(img: &Plane<u8>, det: &Detectors) -> Result<ImageFeatures> {
     for b in BUDGETS {
         let (k, desc) = Detectors::orb_with(b)?.detect_and_compute(img.view())?;
         out.insert(("orb".into(), Some(b)), features(&k, &desc, usize::MAX));
+        let (k, desc) = Detectors::orbslam_with(b)?.detect_and_compute(img.view())?;
+        out.insert(("orbslam".into(), Some(b)), features(&k, &desc, usize::MAX));
     }
+    let (k, desc) = det.orbslam.detect_and_compute(img.view())?;
+    out.insert(("orbslam".into(), None), features(&k, &desc, usize::MAX));
     Ok(out)
 }
 
@@ -176,7 +180,7 @@ pub fn run(opts: &Options) -> Result<()> {
     let det = Detectors::new()?;
     let mut rows = Vec::new();
     let mut keys: Vec<String> = det.lfast.iter().map(|(v, _)| v.key()).collect();
-    keys.extend(["fast9".to_string(), "orb".to_string()]);
+    keys.extend(["fast9".to_string(), "orb".to_string(), "orbslam".to_string()]);
     for sc in &scenes {
         let img1 = crate::image::load_gray(&sc.reference)?;
         let f1 = detect_all(&img1, &det)?;

@@ -15,7 +15,6 @@ use super::output::read_summary;
 use super::repeatability::RepeatSummary;
 use super::vo::VoSummary;
 use super::{EvalError, Result, Suite, Variant, write_text};
-use crate::config::Config;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -25,7 +24,7 @@ pub use super::kitti::paper;
 pub use super::output::{load_average, machine, write_section};
 
 /// Rebuilds `OUT/report.md` from the sections present, in suite order, and
-/// adds the choice of defaults when suites 3-5 have all run.
+/// adds the choice of defaults when suites 3-5 have all run (and counts suite 6 when it has).
 pub fn assemble(out: &Path) -> Result<()> {
     let mut s = String::new();
     let _ = writeln!(s, "# lfast evaluation report\n");
@@ -123,7 +122,7 @@ pub fn headline(out: &Path) -> Result<String> {
     }
     if let Some(k) = read_summary::<KittiSummary>(out, Suite::Kitti)? {
         let get = |key: &str| k.means.iter().find(|m| m.key == key);
-        let cur = Variant { mode: Config::default().mode, support: Config::default().support }.key();
+        let cur = Variant::current().key();
         if let (Some(f), Some(l)) = (get("fast9"), get(&cur)) {
             rows.push(vec![
                 format!("3 KITTI points/frame: FAST-9 vs {}", super::label(&cur)),
@@ -145,7 +144,7 @@ pub fn headline(out: &Path) -> Result<String> {
         }
     }
     if let Some(r) = read_summary::<RepeatSummary>(out, Suite::Repeatability)? {
-        let cur = Variant { mode: Config::default().mode, support: Config::default().support }.key();
+        let cur = Variant::current().key();
         let get = |key: &str| r.means.iter().find(|m| m.key == key && m.budget == Some(DECISION_BUDGET));
         if let (Some(l), Some(f), Some(o)) = (get(&cur), get("fast9"), get("orb")) {
             rows.push(vec![
@@ -161,7 +160,7 @@ pub fn headline(out: &Path) -> Result<String> {
         }
     }
     if let Some(i) = read_summary::<IllumSummary>(out, Suite::Illumination)? {
-        let cur = Variant { mode: Config::default().mode, support: Config::default().support }.key();
+        let cur = Variant::current().key();
         let m = |key: &str| super::mean(i.means.iter().filter(|m| m.key == key).map(|m| m.survival));
         rows.push(vec![
             "5 edge survival: improved Canny vs Canny (mean of changes)".into(),
@@ -175,7 +174,7 @@ pub fn headline(out: &Path) -> Result<String> {
         ]);
     }
     if let Some(v) = read_summary::<VoSummary>(out, Suite::Vo)? {
-        let cur = Variant { mode: Config::default().mode, support: Config::default().support }.key();
+        let cur = Variant::current().key();
         let ate = |key: &str| v.rows.iter().find(|r| r.key == key).and_then(|r| r.ate_rmse).unwrap_or(f64::NAN);
         rows.push(vec![
             format!("6 VO ATE RMSE (m): {} / FAST-9 / ORB", super::label(&cur)),

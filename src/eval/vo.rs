@@ -102,8 +102,12 @@ pub fn run(opts: &Options) -> Result<()> {
             .map_err(vo_err)?;
         rows.extend(rows_of(&t, |_| v.key()));
     }
-    let t = crate::vo::run_suite(&seq, &[FrontEnd::Fast, FrontEnd::Orb], &base, None).map_err(vo_err)?;
-    rows.extend(rows_of(&t, |f| if f == FrontEnd::Fast { "fast9".into() } else { "orb".into() }));
+    let t =
+        crate::vo::run_suite(&seq, &[FrontEnd::Fast, FrontEnd::Orb, FrontEnd::Orbslam], &base, None).map_err(vo_err)?;
+    rows.extend(rows_of(&t, |f| match f {
+        FrontEnd::Fast => "fast9".into(),
+        other => other.name().into(),
+    }));
 
     let opt = |v: Option<f64>| v.unwrap_or(f64::NAN);
     let mut csv = Csv::new(&[

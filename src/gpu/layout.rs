@@ -73,8 +73,8 @@ pub struct Params {
     pub tile_row: u32,
     /// Word offset in the grid buffer of the SPEC 5 cells (see [`FrameLayout::grid_data`]).
     pub cells: u32,
-    /// Padding to 16 bytes.
-    pub _pad: u32,
+    /// Corners move to the Harris maximum within this radius (`Config::snap`, 0 = off).
+    pub snap_radius: u32,
 }
 
 /// The layout of one frame size under one config.
@@ -203,6 +203,7 @@ impl FrameLayout {
         p.n_features = cfg.n_features;
         p.capacity = capacity;
         p.orientation_bins = cfg.orientation_bins;
+        p.snap_radius = cfg.snap();
         p.total_px = total.min(u32::MAX as u64) as u32;
         p.tile_row = TILE_ROW;
         p.max_w = width;

@@ -35,6 +35,7 @@ pub mod readback;
 pub mod response;
 pub mod rules;
 pub mod select;
+pub mod snap;
 pub mod stages;
 
 pub use buffers::{Buffers, GpuKeypoint, StagePlanes};

@@ -113,6 +113,7 @@ stages! {
     lfast: LfastPass,
     response: ResponsePass,
     corner_nms: CornerNmsPass,
+    snap: SnapPass,
     select: SelectPass,
     blur: BlurPass,
     orientation: OrientationPass,

@@ -216,7 +216,7 @@ fn validate(o: &VoOptions) -> Result<(), VoError> {
     if o.frames == Some(0) {
         return bad("frames", "must be at least 1".into());
     }
-    if o.features == FrontEnd::Orb && o.config.n_features == 0 && o.orb_features == 0 {
+    if matches!(o.features, FrontEnd::Orb | FrontEnd::Orbslam) && o.config.n_features == 0 && o.orb_features == 0 {
         return bad("orb_features", "must be at least 1".into());
     }
     Ok(())

@@ -90,6 +90,8 @@ public:
                                  int support = static_cast<int>(default_config().support),
                                  int straightTol = static_cast<int>(default_config().straight_tol),
                                  int nmsRadius = static_cast<int>(default_config().nms_radius),
+                                 int snapRadius = static_cast<int>(default_config().snap_radius),
+                                 LfastDescriptorKind descriptor = static_cast<LfastDescriptorKind>(default_config().descriptor),
                                  Backend backend = Backend::Auto) {
         auto u = [](int v) { return v < 0 ? UINT32_MAX : static_cast<uint32_t>(v); };  // negative: rejected by validation
         Config c = default_config();
@@ -105,6 +107,8 @@ public:
         c.support = u(support);
         c.straight_tol = u(straightTol);
         c.nms_radius = u(nmsRadius);
+        c.snap_radius = u(snapRadius);
+        c.descriptor = static_cast<int32_t>(descriptor);
         return create(c, backend);
     }
 

@@ -1,0 +1,61 @@
+// Beyond the paper (docs/quality.md): each corner that survived corner NMS
+// moves to the Harris maximum of the (2s+1)^2 square around it, s =
+// P.snap_radius (Config::snap()), and takes that response. Mirrors src/cpu/snap.rs.
+// Compiled after response.wgsl (src/gpu/snap.rs): its Harris response on D
+// (structure_sums, harris_from_sums, bit-identical to the CPU) is the one
+// definition used here; this file adds the entry point `snap`.
+// `corners` (counters[CORNERS] of them, any order) are updated in place; the
+// square is scanned row by row and the first of equal responses wins (the
+// earlier (y, x), as in corner NMS); only pixels at least P.border from every
+// side and, with a mask, where the level mask is on are candidates. 2s <= nms_radius keeps positions distinct.
+// Tests: tests/gpu_end_to_end.rs (whole pipeline with snap_radius 1 and 2 == CPU).
+
+@group(0) @binding(5) var<storage, read_write> corners: array<Kp>;
+@group(0) @binding(6) var<storage, read> mask: array<u32>;
+
+// counter::CORNERS in src/gpu/buffers.rs.
+const C_SNAP_CORNERS: u32 = 0u;
+
+fn harris_at(l: u32, x: u32, y: u32) -> f32 {
+    let s = structure_sums(l, i32(x), i32(y));
+    return harris_from_sums(s.x, s.y, s.z);
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn snap(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let k = list_index(wg, li);
+    let s = P.snap_radius;
+    if (s == 0u || k >= min(counters[C_SNAP_CORNERS], P.capacity)) { return; }
+    var c = corners[k];
+    let l = c.level;
+    // corners lie in [border, size - border): the square is cut to it
+    let b = P.border;
+    let x0 = max(select(0u, c.px - s, c.px >= s), b);
+    let y0 = max(select(0u, c.py - s, c.py >= s), b);
+    let x1 = min(c.px + s, lw(l) - b - 1u);
+    let y1 = min(c.py + s, lh(l) - b - 1u);
+    var bx = c.px;
+    var by = c.py;
+    var br = harris_at(l, c.px, c.py);
+    for (var y = y0; y <= y1; y++) {
+        for (var x = x0; x <= x1; x++) {
+            let own = x == c.px && y == c.py;
+            let off = P.use_mask != 0u && mask[loff(l) + y * lw(l) + x] == 0u;
+            if (!own && !off) {
+                let r = harris_at(l, x, y);
+                if (r > br || (r == br && (y < by || (y == by && x < bx)))) {
+                    bx = x;
+                    by = y;
+                    br = r;
+                }
+            }
+        }
+    }
+    let sc = P.scales[l];
+    c.px = bx;
+    c.py = by;
+    c.x = (f32(bx) + 0.5) * sc.x;
+    c.y = (f32(by) + 0.5) * sc.x;
+    c.response = br;
+    corners[k] = c;
+}
