@@ -113,6 +113,9 @@ typedef struct {
   uint32_t orientation_bins;
   // An `LfastDescriptorKind` value.
   int32_t descriptor;
+  // Beyond the paper: each corner moves to the Harris maximum within this many
+  // pixels (0 = stays on its edge pixel), 0..=16; at most `nms_radius / 2` is used.
+  uint32_t snap_radius;
 } LfastConfig;
 
 // A borrowed image: `height` rows of `width` pixels, row `y` starting at
