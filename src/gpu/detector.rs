@@ -267,7 +267,7 @@ impl GpuDetector {
 
     /// Records the whole pipeline for one frame into the caller's encoder.
     /// Never submits or polls. Afterwards `ws.buffers.keypoints` holds
-    /// `counters[1]` keypoints in SPEC 9 order (see [`GpuKeypoint`]),
+    /// `counters[1]` keypoints in SPEC 9 order (see [`GpuKeypoint`](super::buffers::GpuKeypoint)),
     /// `ws.buffers.descriptors` their descriptors, and `ws.buffers.indirect`
     /// dispatch and draw arguments sized by the count.
     pub fn encode(&self, enc: &mut wgpu::CommandEncoder, input: GpuInput<'_>, ws: &mut GpuWorkspace) -> Result<()> {

@@ -2,7 +2,7 @@
 //! and timestamps are copied into, mapped while the next frame runs, and
 //! turned into a [`Frame`]. [`GpuDetector`](super::GpuDetector)'s
 //! `encode_readback`, `start_readback`, `try_finish_readback` and
-//! `finish_readback` drive a workspace's [`Ring`].
+//! `finish_readback` drive a workspace's `Ring`.
 //!
 //! What a frame costs the host, once its staging buffer is mapped: the count
 //! from the first word, then the used part only (`count` keypoints and
