@@ -37,12 +37,12 @@ def lfast_bin() -> Path:
     return exe
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def cli() -> Path:
     return lfast_bin()
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def cli_json(cli: Path, tmp_path_factory: pytest.TempPathFactory) -> dict:
     """`lfast detect tests/data/*.png --backend cpu` as {image name: parsed JSON}."""
     out = tmp_path_factory.mktemp("cli")
