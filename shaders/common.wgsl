@@ -286,7 +286,8 @@ struct Kp {
     m10: i32,
     m01: i32,
     bin: u32,
-    pad: u32,
+    // snap.wgsl's sub-pixel offset: x in bits 0-7, y in bits 8-15, i8 each (GpuKeypoint::sub).
+    sub: u32,
 }
 
 // SPEC 2-3 numerics of gradient.wgsl, nms.wgsl and gradient_nms.wgsl (one

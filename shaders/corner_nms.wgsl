@@ -77,7 +77,7 @@ fn suppress(l: u32, p: vec2<u32>) {
     k.m10 = 0;
     k.m01 = 0;
     k.bin = 0u;
-    k.pad = 0u;
+    k.sub = 0u;
     corners[slot] = k;
 }
 

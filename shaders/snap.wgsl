@@ -8,6 +8,10 @@
 // square is scanned row by row and the first of equal responses wins (the
 // earlier (y, x), as in corner NMS); only pixels at least P.border from every
 // side and, with a mask, where the level mask is on are candidates. 2s <= nms_radius keeps positions distinct.
+// The maximum is then located to 1/16 pixel (`subpixel`, = src/cpu/snap.rs
+// `subpixel`): the offset's steps are decided by comparisons of f32 sums and
+// products, each rounded once (WGSL rounds f32 + - * correctly, not /), and
+// packed into Kp.sub; the host builds the keypoint from them (src/gpu/readback.rs).
 // Tests: tests/gpu_end_to_end.rs (whole pipeline with snap_radius 1 and 2 == CPU).
 
 @group(0) @binding(5) var<storage, read_write> corners: array<Kp>;
@@ -19,6 +23,26 @@ const C_SNAP_CORNERS: u32 = 0u;
 fn harris_at(l: u32, x: u32, y: u32) -> f32 {
     let s = structure_sums(l, i32(x), i32(y));
     return harris_from_sums(s.x, s.y, s.z);
+}
+
+// round(16 d), clamped to +-7, for the peak d of the parabola through
+// (-1, a), (0, r0), (1, b); 0 where the curvature 2 r0 - a - b is not positive.
+// 16 d >= k - 1/2  <=>  b - a >= ((2k - 1) / 16) (2 r0 - a - b).
+fn subpixel(a: f32, r0: f32, b: f32) -> i32 {
+    // 2 r0 is exact, so a fused 2 r0 - a rounds as the two steps do
+    let den = opaque(opaque(2.0 * r0 - a) - b);
+    if (!(den > 0.0)) { return 0; }
+    let num = opaque(b - a);
+    var q = 0;
+    for (var k = 1; k <= 7; k++) {
+        let t = opaque(opaque(f32(2 * k - 1) * 0.0625) * den);
+        if (num >= t) {
+            q = k;
+        } else if (num <= -t) {
+            q = -k;
+        }
+    }
+    return q;
 }
 
 @compute @workgroup_size(64, 1, 1)
@@ -51,11 +75,20 @@ fn snap(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
             }
         }
     }
+    var qx = 0;
+    var qy = 0;
+    if (bx >= 1u && bx + 1u < lw(l)) {
+        qx = subpixel(harris_at(l, bx - 1u, by), br, harris_at(l, bx + 1u, by));
+    }
+    if (by >= 1u && by + 1u < lh(l)) {
+        qy = subpixel(harris_at(l, bx, by - 1u), br, harris_at(l, bx, by + 1u));
+    }
     let sc = P.scales[l];
     c.px = bx;
     c.py = by;
-    c.x = (f32(bx) + 0.5) * sc.x;
-    c.y = (f32(by) + 0.5) * sc.x;
+    c.x = (f32(bx) + 0.5 + f32(qx) * 0.0625) * sc.x;
+    c.y = (f32(by) + 0.5 + f32(qy) * 0.0625) * sc.x;
     c.response = br;
+    c.sub = (bitcast<u32>(qx) & 0xffu) | ((bitcast<u32>(qy) & 0xffu) << 8u);
     corners[k] = c;
 }

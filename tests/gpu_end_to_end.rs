@@ -177,7 +177,20 @@ fn snapped_corners_equal_the_cpu() {
                 let old: std::collections::HashSet<_> = before.iter().map(at).collect();
                 let moved = c.0.iter().filter(|k| !old.contains(&at(k))).count();
                 assert!(moved > 0 || c.0.is_empty(), "{what}: nothing moved");
-                eprintln!("{what}: {} keypoints, {moved} not at an unsnapped position, identical", c.0.len());
+                // and located some between pixels (1/16 steps off the half-pixel grid)
+                let between =
+                    c.0.iter()
+                        .filter(|k| {
+                            let s = cpu.config().level_scale(k.octave as u32);
+                            let f = (k.pt.x as f64 / s - 0.5).rem_euclid(1.0);
+                            f > 1e-3 && f < 1.0 - 1e-3
+                        })
+                        .count();
+                assert!(between > 0 || c.0.is_empty(), "{what}: no sub-pixel offset");
+                eprintln!(
+                    "{what}: {} keypoints, {moved} not at an unsnapped position, {between} between pixels, identical",
+                    c.0.len()
+                );
             }
         }
     }

@@ -222,7 +222,13 @@ fn corner_nms_matches_cpu_on_real_images() {
                 }
                 t::upload_level(&ctx, &b, &b.resp, l, &resp);
                 for i in corner_nms::corner_nms(w, h, &lv.cands, &lv.resp, r) {
-                    let c = Corner { level: l as u32, x: lv.cands[i][0], y: lv.cands[i][1], response: lv.resp[i] };
+                    let c = Corner {
+                        level: l as u32,
+                        x: lv.cands[i][0],
+                        y: lv.cands[i][1],
+                        response: lv.resp[i],
+                        sub: [0, 0],
+                    };
                     want.push(bits(&corner_kp(&cfg, &c)));
                 }
             }
@@ -273,7 +279,7 @@ fn corner_nms_breaks_ties_by_position() {
                 t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(lw, lh, &cands));
                 t::upload_level(&ctx, &b, &b.resp, l, &rmap);
                 for i in corner_nms::corner_nms(lw, lh, &cands, &resp, r) {
-                    let c = Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] };
+                    let c = Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i], sub: [0, 0] };
                     want.push(bits(&corner_kp(&cfg, &c)));
                 }
             }
@@ -345,7 +351,7 @@ fn random_corners(cfg: &Config, w: u32, h: u32, n: usize, seed: u32) -> Vec<Corn
             1 => (rng.below(2000) as f32 - 1000.0) * 1.0e-6,
             _ => f32::from_bits(rng.next_u32() & 0xbfff_ffff), // finite, any sign and scale
         };
-        out.push(Corner { level: l, x, y, response });
+        out.push(Corner { level: l, x, y, response, sub: [0, 0] });
     }
     out
 }
@@ -361,7 +367,7 @@ fn check_select(ctx: &GpuContext, pass: &SelectPass, cfg: &Config, w: u32, h: u3
         m10: c.y as i32 - 1000,
         m01: -(c.x as i32),
         bin: c.level * 7,
-        _pad: 0xdead,
+        sub: 0xdead,
         ..corner_kp(cfg, c)
     };
     let list: Vec<GpuKeypoint> = corners.iter().map(kp).collect();
@@ -423,7 +429,7 @@ fn select_with_every_corner_in_one_bucket() {
 fn select_orders_signed_zeros_and_ties() {
     let Some(ctx) = t::context() else { return };
     let pass = SelectPass::new(&ctx.device);
-    let c = |level, x, y, response| Corner { level, x, y, response };
+    let c = |level, x, y, response| Corner { level, x, y, response, sub: [0, 0] };
     let corners = vec![
         c(0, 30, 20, -0.0),
         c(0, 20, 20, 0.0),
@@ -499,6 +505,7 @@ fn response_nms_select_chain_matches_cpu() {
                             x: lv.cands[i][0],
                             y: lv.cands[i][1],
                             response: lv.resp[i],
+                            sub: [0, 0],
                         })
                         .collect::<Vec<_>>(),
                 );

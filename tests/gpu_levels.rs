@@ -305,7 +305,7 @@ fn keypoints(levels: &[Plane<u8>], cap: usize, seed: u32) -> Vec<GpuKeypoint> {
                 m10: 12345,
                 m01: -777,
                 bin: 99,
-                _pad: 0,
+                sub: 0,
             });
         }
     }

@@ -112,7 +112,7 @@ impl OrbDetector {
                     .iter()
                     .map(|k| {
                         let (x, y) = (k.pt.x as u32, k.pt.y as u32);
-                        Corner { level: l as u32, x, y, response: response::harris(img, x, y) }
+                        Corner { level: l as u32, x, y, response: response::harris(img, x, y), sub: [0, 0] }
                     })
                     .collect();
                 cs.sort_by(order);

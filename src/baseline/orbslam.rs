@@ -120,6 +120,7 @@ pub fn level_fast(img: &Plane<u8>, level: u32, ini: i32, min: i32) -> Vec<Corner
             x: x0 + k.pt.x as u32,
             y: y0 + k.pt.y as u32,
             response: k.response,
+            sub: [0, 0],
         }));
     }
     out

@@ -334,7 +334,7 @@ impl CpuDetector {
     }
 
     /// Descriptors of caller-supplied keypoints (from any detector). A keypoint
-    /// is sampled at level `octave`, at pixel `floor(pt / s^octave + 0.25)`
+    /// is sampled at level `octave`, at pixel `floor(pt / s^octave + 1/32)`
     /// ([`spec::level_pixel`]),
     /// which is the intended pixel both for lfast's half-pixel convention and
     /// OpenCV's integer one. Orientation is recomputed from the image (the
@@ -361,7 +361,7 @@ impl CpuDetector {
             if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
                 return Err(bad(format!("position ({}, {}) is outside level {l} ({w}x{h})", kp.pt.x, kp.pt.y)));
             }
-            at.push(Corner { level: l, x: x as u32, y: y as u32, response: kp.response });
+            at.push(Corner { level: l, x: x as u32, y: y as u32, response: kp.response, sub: [0, 0] });
         }
         if self.cfg.descriptor == DescriptorKind::Opencv {
             return Ok(self.describe_opencv(&image.to_plane(), keypoints));
@@ -420,7 +420,7 @@ impl CpuDetector {
             let mut kept: Vec<Corner> =
                 corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
                     .into_iter()
-                    .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i] })
+                    .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i], sub: [0, 0] })
                     .collect();
             if self.cfg.snap() > 0 {
                 let m = masks.as_ref().map(|m| &m[l]);
@@ -453,7 +453,8 @@ impl CpuDetector {
         let s = self.cfg.level_scale(c.level);
         let (m10, m01) = orientation::moments(&levels[c.level as usize], c.x, c.y);
         let bin = self.rotated.as_ref().map_or(0, |r| r.bins.bin_of(m10, m01));
-        let kp = spec::keypoint_at(c.level, c.x, c.y, s, centre, orientation::angle_deg(m10, m01), c.response);
+        let kp =
+            spec::keypoint_at_sub(c.level, [c.x, c.y], c.sub, s, centre, orientation::angle_deg(m10, m01), c.response);
         (kp, bin)
     }
 

@@ -5,7 +5,7 @@
 use std::cmp::Ordering;
 
 /// A corner that survived corner NMS, in level coordinates.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Corner {
     /// Pyramid level.
     pub level: u32,
@@ -15,6 +15,9 @@ pub struct Corner {
     pub y: u32,
     /// Harris response.
     pub response: f32,
+    /// Sub-pixel offset of the snapped corner, in 1/[`SUBPIXEL`](crate::cpu::snap::SUBPIXEL)
+    /// of a level pixel, each in `-7..=7` ([`crate::cpu::snap`]); `[0, 0]` without snap.
+    pub sub: [i8; 2],
 }
 
 /// SPEC 9's output order: response descending, then level, y, x ascending.
@@ -146,7 +149,7 @@ mod tests {
     use super::*;
 
     fn c(level: u32, x: u32, y: u32, r: f32) -> Corner {
-        Corner { level, x, y, response: r }
+        Corner { level, x, y, response: r, sub: [0, 0] }
     }
 
     #[test]

@@ -39,8 +39,21 @@ pub struct GpuKeypoint {
     pub m01: i32,
     /// Orientation bin.
     pub bin: u32,
-    /// Padding.
-    pub _pad: u32,
+    /// The snapped corner's sub-pixel offset (src/cpu/snap.rs): x in bits 0-7 and y in
+    /// bits 8-15, each an i8 in 1/16 of a level pixel ([`GpuKeypoint::sub_steps`]); 0 without snap.
+    pub sub: u32,
+}
+
+impl GpuKeypoint {
+    /// The sub-pixel offset as `Corner::sub` holds it, in 1/16 of a level pixel.
+    ///
+    /// ```
+    /// let k = lfast::gpu::GpuKeypoint { sub: 0xfd04, ..Default::default() };
+    /// assert_eq!(k.sub_steps(), [4, -3]);
+    /// ```
+    pub fn sub_steps(&self) -> [i8; 2] {
+        [self.sub as u8 as i8, (self.sub >> 8) as u8 as i8]
+    }
 }
 
 /// u32 words per [`GpuKeypoint`].

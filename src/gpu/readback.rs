@@ -40,7 +40,15 @@ pub fn to_keypoint(cfg: &Config, k: &GpuKeypoint) -> KeyPoint {
 
 /// [`to_keypoint`] with the level's scale already known.
 fn to_keypoint_at(k: &GpuKeypoint, s: f64) -> KeyPoint {
-    spec::keypoint_at(k.level, k.px, k.py, s, spec::LFAST_CENTRE, angle::angle_deg(k.m10, k.m01), k.response)
+    spec::keypoint_at_sub(
+        k.level,
+        [k.px, k.py],
+        k.sub_steps(),
+        s,
+        spec::LFAST_CENTRE,
+        angle::angle_deg(k.m10, k.m01),
+        k.response,
+    )
 }
 
 /// State of one staging buffer of the ring.

@@ -8,10 +8,14 @@
 //!   which sit on the gradient grid, [`OPENCV_CENTRE`] (0) for FAST/ORB as
 //!   OpenCV reports them. The CPU path, the GPU readback and the baselines all
 //!   build their keypoints here.
+//!   [`keypoint_at_sub`] adds a snapped corner's sub-pixel offset
+//!   (`sub / 16`, at most 7/16 either way; src/cpu/snap.rs).
 //! - [`level_pixel`]: the level pixel a keypoint position names,
-//!   `floor(pt / s + 0.25)`: the intended pixel under both conventions (it
-//!   tolerates a quarter pixel of rounding either way), used to describe
-//!   caller-supplied keypoints and by the tests that map keypoints back.
+//!   `floor(pt / s + 1/32)`: the intended pixel under both conventions and
+//!   with any sub-pixel offset (OpenCV's `x s` and lfast's `(x + 1/2 ± 7/16) s`
+//!   both lie in `[x - 1/32, x + 1 - 1/32)`, with room for the f32 rounding),
+//!   used to describe caller-supplied keypoints and by the tests that map
+//!   keypoints back.
 
 use crate::config::Config;
 use crate::keypoint::KeyPoint;
@@ -28,8 +32,30 @@ pub const OPENCV_CENTRE: f64 = 0.0;
 /// assert_eq!((k.pt.x, k.pt.y, k.size, k.octave), (12.6, 5.4, 37.2, 1));
 /// ```
 pub fn keypoint_at(level: u32, x: u32, y: u32, s: f64, centre: f64, angle: f32, response: f32) -> KeyPoint {
+    keypoint_at_sub(level, [x, y], [0, 0], s, centre, angle, response)
+}
+
+/// [`keypoint_at`] of level pixel `p` moved by `sub / 16` of a pixel
+/// ([`crate::cpu::snap::SUBPIXEL`] steps), still computed in f64 and rounded once.
+///
+/// ```
+/// let k = lfast::spec::keypoint_at_sub(0, [10, 4], [4, -2], 1.0, lfast::spec::LFAST_CENTRE, 0.0, 0.0);
+/// assert_eq!((k.pt.x, k.pt.y), (10.75, 4.375));
+/// assert_eq!(lfast::spec::level_pixel(k.pt.x, 1.0), 10.0);
+/// ```
+pub fn keypoint_at_sub(
+    level: u32,
+    p: [u32; 2],
+    sub: [i8; 2],
+    s: f64,
+    centre: f64,
+    angle: f32,
+    response: f32,
+) -> KeyPoint {
+    let step = crate::cpu::snap::SUBPIXEL as f64;
+    let at = |x: u32, q: i8| ((x as f64 + centre + q as f64 / step) * s) as f32;
     KeyPoint {
-        pt: glam::Vec2::new(((x as f64 + centre) * s) as f32, ((y as f64 + centre) * s) as f32),
+        pt: glam::Vec2::new(at(p[0], sub[0]), at(p[1], sub[1])),
         size: (31.0 * s) as f32,
         angle,
         response,
@@ -39,7 +65,7 @@ pub fn keypoint_at(level: u32, x: u32, y: u32, s: f64, centre: f64, angle: f32, 
 }
 
 /// The level pixel coordinate that position `p` names at scale `s`:
-/// `floor(p / s + 0.25)` (may be negative or past the level; the caller checks).
+/// `floor(p / s + 1/32)` (may be negative or past the level; the caller checks).
 ///
 /// ```
 /// use lfast::spec::{LFAST_CENTRE, OPENCV_CENTRE, keypoint_at, level_pixel};
@@ -50,7 +76,7 @@ pub fn keypoint_at(level: u32, x: u32, y: u32, s: f64, centre: f64, angle: f32, 
 /// }
 /// ```
 pub fn level_pixel(p: f32, s: f64) -> f64 {
-    (p as f64 / s + 0.25).floor()
+    (p as f64 / s + 1.0 / 32.0).floor()
 }
 
 /// The level pixel (x, y) of a keypoint under `cfg`'s scale (by [`level_pixel`]),
@@ -73,6 +99,13 @@ mod tests {
                 for x in 0..w {
                     let k = keypoint_at(l as u32, x, h - 1, s, centre, 0.0, 0.0);
                     assert_eq!(keypoint_level_pixel(&cfg, &k), (x, h - 1), "level {l} x {x} centre {centre}");
+                }
+            }
+            let m = crate::cpu::snap::SUBPIXEL_MAX;
+            for x in 0..w {
+                for q in -m..=m {
+                    let k = keypoint_at_sub(l as u32, [x, h - 1], [q, -q], s, LFAST_CENTRE, 0.0, 0.0);
+                    assert_eq!(keypoint_level_pixel(&cfg, &k), (x, h - 1), "level {l} x {x} sub {q}");
                 }
             }
         }
