@@ -64,6 +64,8 @@ fn bench_variants(c: &mut Criterion, img: &Plane<u8>) {
         ("branch_s3", Config { mode: Mode::Branch, support: 3, snap_radius: 0, ..d.clone() }),
         ("branch_s3_snap1", Config { mode: Mode::Branch, support: 3, snap_radius: 1, ..d.clone() }),
         ("paper_s3", Config { mode: Mode::Paper, support: 3, snap_radius: 0, ..d.clone() }),
+        ("paper_s3_nms4_snap2", Config { mode: Mode::Paper, support: 3, nms_radius: 4, snap_radius: 2, ..d.clone() }),
+        ("paper_s3_nms4_snap1", Config { mode: Mode::Paper, support: 3, nms_radius: 4, snap_radius: 1, ..d.clone() }),
     ];
     let mut g = c.benchmark_group(format!("variants_{}x{}", img.width, img.height));
     g.sample_size(20).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(3));
