@@ -266,11 +266,11 @@ impl Decision {
         let _ = writeln!(
             s,
             "Candidates: L-FAST `mode` in {{paper, branch}} x `support` in {{3, 4}}, and the two \
-             support-3 ones with `snap_radius = 1` (docs/quality.md), everything else as `Config::default()`. Score = mean of repeatability and matching score at a budget of \
+             support-3 ones with `snap_radius = 1` (the corner moved to the Harris peak, located to 1/16 px; docs/quality.md), everything else as `Config::default()`. Score = mean of repeatability and matching score at a budget of \
              {DECISION_BUDGET} keypoints (suite 4, every pair of every scene), keypoint survival (suite \
              5, every image, the four changes) and, when suite 6 ran for every candidate, the relative \
-             trajectory accuracy: the smallest visual-odometry ATE RMSE (SE(3)) of the candidates over the \
-             candidate's own (1 for the best trajectory). The current default stays when its score is within \
+             trajectory accuracy: the smallest visual-odometry ATE RMSE (SE(3), the mean over suite 6's RANSAC \
+             seeds) of the candidates over the candidate's own (1 for the best trajectory). The current default stays when its score is within \
              {DECISION_MARGIN} of the best; otherwise the choice is the candidate with the fewest KITTI \
              keypoints per frame (suite 3; the paper's aim: fewer points of the same quality) among those \
              within {DECISION_MARGIN} of the best. Basis: {}.\n",
