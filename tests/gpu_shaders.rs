@@ -1,8 +1,14 @@
 //! Every shader parses and validates with naga, has a compute entry point,
-//! and declares exactly the bindings its pass struct binds.
+//! and declares exactly the bindings its pass struct binds; on a device, a
+//! shader that does not compile or a pipeline that fails validation makes
+//! the build an error naming it.
+//!
+//! Run the device tests with `WGPU_ADAPTER_NAME=llvmpipe REQUIRE_GPU=1 cargo test --test gpu_shaders`.
 
 use lfast::gpu::SHADERS;
-use lfast::gpu::kernel::{Slot, full_source};
+use lfast::gpu::kernel::{Binding, PARAMS, Slot, b, full_source};
+use lfast::gpu::stages::build_kernels;
+use lfast::testing as t;
 use naga::{AddressSpace, StorageAccess};
 
 fn module(name: &str, source: &str) -> naga::Module {
@@ -68,4 +74,70 @@ fn reflected_bindings_match_the_pass_structs() {
         declared.sort_by_key(|f| f.0);
         assert_eq!(found, declared, "{}: shader bindings vs src/gpu/{}.rs BINDINGS", s.name, s.name);
     }
+}
+
+// ---------------------------------------------------------------------------
+// build errors on a device (each kernel built on its own thread, as the
+// detector's stages are)
+
+const OUT: &[Binding] = &[PARAMS, b(1, "out", Slot::ReadWrite)];
+/// The same shader's output declared read-only: the layout contradicts it.
+const OUT_READ_ONLY: &[Binding] = &[PARAMS, b(1, "out", Slot::Read)];
+
+const GOOD: &str = "@group(0) @binding(1) var<storage, read_write> out: array<u32>;
+@compute @workgroup_size(64) fn main(@builtin(global_invocation_id) id: vec3<u32>) { out[id.x] = P.n_levels; }";
+/// Does not parse: shader module creation fails.
+const SYNTAX: &str = "@group(0) @binding(1) var<storage, read_write> out: array<u32>;
+@compute @workgroup_size(64) fn main(@builtin(global_invocation_id) id: vec3<u32>) { out[id.x] = ; }";
+/// Parses but does not type-check (u32 = f32).
+const TYPES: &str = "@group(0) @binding(1) var<storage, read_write> out: array<u32>;
+@compute @workgroup_size(64) fn main(@builtin(global_invocation_id) id: vec3<u32>) { out[id.x] = 1.5; }";
+/// Compiles, but has no entry point `main`: the pipeline fails validation.
+const NO_MAIN: &str = "@group(0) @binding(1) var<storage, read_write> out: array<u32>;
+@compute @workgroup_size(64) fn other(@builtin(global_invocation_id) id: vec3<u32>) { out[id.x] = 0u; }";
+
+#[test]
+fn good_kernels_build_on_their_threads() {
+    let Some(ctx) = t::context() else { return };
+    build_kernels(&ctx.device, &[("good_a", GOOD, OUT), ("good_b", GOOD, OUT)]).expect("valid kernels build");
+}
+
+#[test]
+fn a_shader_that_does_not_compile_is_an_error_naming_it() {
+    let Some(ctx) = t::context() else { return };
+    for (name, source) in [("broken_syntax", SYNTAX), ("broken_types", TYPES)] {
+        let e = build_kernels(&ctx.device, &[("good", GOOD, OUT), (name, source, OUT)])
+            .expect_err("a shader that does not compile must fail the build")
+            .to_string();
+        assert!(e.contains(&format!("stage `{name}`")), "{name}: error does not name the stage: {e}");
+        assert!(!e.contains("stage `good`"), "{name}: the valid kernel is blamed too: {e}");
+    }
+}
+
+#[test]
+fn a_pipeline_that_fails_validation_is_an_error_naming_it() {
+    let Some(ctx) = t::context() else { return };
+    let e = build_kernels(&ctx.device, &[("no_main", NO_MAIN, OUT), ("good", GOOD, OUT)])
+        .expect_err("a missing entry point must fail the build")
+        .to_string();
+    assert!(e.contains("stage `no_main`") && !e.contains("stage `good`"), "{e}");
+    let e = build_kernels(&ctx.device, &[("read_only_out", GOOD, OUT_READ_ONLY)])
+        .expect_err("a layout that contradicts the shader must fail the build")
+        .to_string();
+    assert!(e.contains("stage `read_only_out`"), "{e}");
+}
+
+#[test]
+fn every_failing_kernel_is_named() {
+    let Some(ctx) = t::context() else { return };
+    let e = build_kernels(&ctx.device, &[("first", SYNTAX, OUT), ("ok", GOOD, OUT), ("second", NO_MAIN, OUT)])
+        .expect_err("two broken kernels")
+        .to_string();
+    assert!(e.contains("stage `first`") && e.contains("stage `second`") && !e.contains("stage `ok`"), "{e}");
+}
+
+#[test]
+fn the_detector_builds_every_stage_without_error() {
+    let Some(ctx) = t::context() else { return };
+    lfast::gpu::GpuDetector::new(ctx, lfast::Config::default()).expect("every stage builds");
 }

@@ -154,11 +154,7 @@ impl GpuDetector {
                 reason: format!("the passes bind up to {need} storage buffers, {} allows {have}", ctx.info.name),
             });
         }
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let passes = Passes::new(&ctx.device);
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu { reason: format!("building the pipelines: {e}") });
-        }
+        let passes = Passes::new(&ctx.device)?;
         Ok(Self { ctx, cfg, opts, passes, mask_radius: spec::mask_radius() })
     }
 

@@ -254,11 +254,8 @@ impl GpuMatcher {
     /// Builds the pipelines on `ctx`'s device.
     pub fn new(ctx: GpuContext) -> Result<Self> {
         ctx.check_lost_polled()?;
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let pass = MatcherPass::new(&ctx.device);
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu { reason: format!("building the matcher pipelines: {e}") });
-        }
+        let pass = super::stages::checked(&ctx.device, MatcherPass::NAME, || MatcherPass::new(&ctx.device))
+            .map_err(|e| Error::Gpu { reason: format!("building the matcher pipelines: {e}") })?;
         Ok(Self { ctx, pass, state: Mutex::new(None) })
     }
 

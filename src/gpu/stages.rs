@@ -7,8 +7,10 @@
 
 use super::ShaderInfo;
 use super::buffers::Buffers;
+use super::kernel::{Binding, Kernel};
 use super::pass::Pass;
-use crate::error::Result;
+use crate::error::{Error, Result};
+use std::thread::ScopedJoinHandle;
 
 /// Declares the stages (`module: PassType`, in recording order) and the
 /// shaders that are not a stage of the detector (`standalone: module`).
@@ -39,11 +41,19 @@ macro_rules! stages {
             /// Compiles every stage's pipelines, each stage on its own scoped
             /// thread: shader translation and the driver's compile take most
             /// of a detector's start (~145 ms of lavapipe's ~180), and stages
-            /// are independent.
-            pub(crate) fn new(device: &wgpu::Device) -> Self {
+            /// are independent. Each thread builds inside its own error
+            /// scopes ([`checked`]); a shader that does not compile or a
+            /// pipeline that fails validation is an [`Error::Gpu`] naming
+            /// every stage that failed.
+            pub(crate) fn new(device: &wgpu::Device) -> Result<Self> {
                 std::thread::scope(|s| {
-                    $(let $m = s.spawn(|| <super::$m::$ty as Pass>::new(device));)*
-                    Self { $($m: $m.join().unwrap_or_else(|e| std::panic::resume_unwind(e)),)* }
+                    $(let $m = s.spawn(|| checked(device, stringify!($m), || <super::$m::$ty as Pass>::new(device)));)*
+                    let mut errors = Vec::new();
+                    $(let $m = joined($m, &mut errors);)*
+                    match ($($m,)*) {
+                        ($(Some($m),)*) => Ok(Self { $($m,)* }),
+                        _ => Err(failed(&errors)),
+                    }
                 })
             }
 
@@ -119,6 +129,67 @@ stages! {
     orientation: OrientationPass,
     orb: OrbPass;
     standalone: matcher, gradient, nms, histogram, cand_list,
+}
+
+/// Runs `build` (one stage's shader and pipeline creation) inside error
+/// scopes for validation, out-of-memory and internal errors, pushed and
+/// popped on the calling thread: wgpu's error scopes are per thread, so a
+/// scope pushed by the thread that spawned the builders never sees their
+/// errors (they would reach the uncaptured-error handler, which only logs).
+/// The error names `stage`.
+pub(crate) fn checked<T>(
+    device: &wgpu::Device,
+    stage: &str,
+    build: impl FnOnce() -> T,
+) -> std::result::Result<T, String> {
+    let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let internal = device.push_error_scope(wgpu::ErrorFilter::Internal);
+    let built = build();
+    // popped innermost first, as pushed
+    let errors = [internal.pop(), oom.pop(), validation.pop()].map(pollster::block_on);
+    match errors.into_iter().flatten().next() {
+        Some(e) => Err(format!("stage `{stage}`: {e}")),
+        None => Ok(built),
+    }
+}
+
+/// The result of a [`checked`] builder thread: `Some` when it built, else
+/// `None` with its error appended to `errors`. A panic on the thread goes on
+/// unwinding here.
+fn joined<T>(handle: ScopedJoinHandle<'_, std::result::Result<T, String>>, errors: &mut Vec<String>) -> Option<T> {
+    match handle.join().unwrap_or_else(|e| std::panic::resume_unwind(e)) {
+        Ok(built) => Some(built),
+        Err(e) => {
+            errors.push(e);
+            None
+        }
+    }
+}
+
+/// The error for the stages that failed to build.
+fn failed(errors: &[String]) -> Error {
+    Error::Gpu { reason: format!("building the pipelines: {}", errors.join("; ")) }
+}
+
+/// Builds one kernel (entry point `main`) for each `(name, stage source,
+/// bindings)` exactly as [`Passes`] builds the stages: each on its own scoped
+/// thread inside [`checked`], the results gathered by [`joined`]. Lets the
+/// tests prove that a shader that does not compile, or a pipeline that fails
+/// validation, comes back as an error naming it.
+#[doc(hidden)]
+pub fn build_kernels(device: &wgpu::Device, kernels: &[(&str, &str, &'static [Binding])]) -> Result<()> {
+    std::thread::scope(|s| {
+        let handles: Vec<_> = kernels
+            .iter()
+            .map(|&(name, source, bindings)| {
+                s.spawn(move || checked(device, name, || Kernel::new(device, name, source, "main", bindings)))
+            })
+            .collect();
+        let mut errors = Vec::new();
+        let built = handles.into_iter().filter_map(|h| joined(h, &mut errors)).count();
+        if errors.is_empty() && built == kernels.len() { Ok(()) } else { Err(failed(&errors)) }
+    })
 }
 
 /// Per-stage GPU timestamps (when the adapter has `TIMESTAMP_QUERY`): a
