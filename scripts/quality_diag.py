@@ -10,12 +10,14 @@ Hamming matches within eps / min(common).
 
     python3 scripts/quality_diag.py [--data ../shared/data/homography] [--budget 500] [SECTION ...]
 
-Sections: levels, localisation, loss, candidates, swap, snap (default: all).
+Sections: levels, localisation, loss, candidates, swap, snap (default: all), and
+snaprank, variants, vo (VO ATE over five RANSAC seeds; needs ../kitti beside --data).
 Needs numpy and opencv-python (cv2 FAST/ORB for the references, cv2.cornerHarris).
 """
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -422,15 +424,16 @@ def section_snaprank(a):
         print(f"| {lab} | {100 * np.mean(st[0]):.1f}% | {100 * np.mean(st[1]):.1f}% |")
 
 
+# Spelled out in full, so that a change of Config::default() does not change what a row means.
 VARIANTS = {
-    "default": {},
-    "support 3": {"support": 3},
-    "snap 1": {"snap_radius": 1},
-    "support 3, snap 1": {"support": 3, "snap_radius": 1},
-    "nms 4, snap 2": {"nms_radius": 4, "snap_radius": 2},
-    "support 3, nms 4, snap 2": {"support": 3, "nms_radius": 4, "snap_radius": 2},
-    "paper s3": {"mode": "paper", "support": 3},
-    "paper s3, snap 1": {"mode": "paper", "support": 3, "snap_radius": 1},
+    "branch s4 (the default before 2026-11-26)": {"mode": "branch", "support": 4, "snap_radius": 0},
+    "branch s3": {"mode": "branch", "support": 3, "snap_radius": 0},
+    "branch s3, snap 1": {"mode": "branch", "support": 3, "snap_radius": 1},
+    "branch s3, nms 4, snap 2": {"mode": "branch", "support": 3, "nms_radius": 4, "snap_radius": 2},
+    "paper s3": {"mode": "paper", "support": 3, "snap_radius": 0},
+    "paper s3, snap 1 (default)": {"mode": "paper", "support": 3, "snap_radius": 1},
+    "paper s3, nms 4, snap 1": {"mode": "paper", "support": 3, "nms_radius": 4, "snap_radius": 1},
+    "paper s3, nms 4, snap 2": {"mode": "paper", "support": 3, "nms_radius": 4, "snap_radius": 2},
 }
 
 
@@ -451,6 +454,40 @@ def section_variants(a):
             allp.append((r, m))
         cell = lambda v: f"{100 * np.mean([x[0] for x in v]):.1f} / {100 * np.mean([x[1] for x in v]):.1f}"
         print(f"| {n} | " + " | ".join(cell(per[s]) for s in sc) + f" | {cell(allp)} |")
+        sys.stdout.flush()
+
+
+SEEDS = [24301, 1, 2, 3, 4]
+
+
+def section_vo(a):
+    """VO ATE over five RANSAC seeds and the level-0 count (target d) of each variant."""
+    seq = os.path.join(a.data, "..", "kitti", "seq01_000000-000050")
+    print(f"\n## vo: `lfast vo` ATE RMSE (SE(3)) over RANSAC seeds {SEEDS}, and level-0 keypoints per frame (n_levels 1, no cap)")
+    print("| variant | ATE mean (m) | min | max | keypoints/frame | level-0 keypoints/frame |")
+    print("|---|---:|---:|---:|---:|---:|")
+    frames = sorted(os.path.join(seq, "image_0", f) for f in os.listdir(os.path.join(seq, "image_0")))
+    rows = [(n, VARIANTS[n]) for n in VARIANTS if not a.only or n in a.only]
+    rows += [(f, None) for f in ("fast", "orbslam") if not a.only or f in a.only]
+    for n, cfg in rows:
+        ates, kp = [], 0
+        with tempfile.TemporaryDirectory() as tmp:
+            conf = os.path.join(tmp, "c.toml")
+            with open(conf, "w") as f:
+                for k, v in (cfg or {}).items():
+                    f.write(f"{k} = {json.dumps(v)}\n")
+            for seed in SEEDS:
+                args = [LFAST, "vo", "--seed", str(seed), "--out", os.path.join(tmp, str(seed)), seq]
+                args += ["--config", conf] if cfg is not None else ["--features", n]
+                out = subprocess.run(args, check=True, capture_output=True, text=True)
+                text = out.stderr + out.stdout
+                ates.append(float(re.search(r"ATE RMSE ([0-9.]+)", text).group(1)))
+                kp = int(re.search(r"(\d+) keypoints", text).group(1))
+        l0 = "–"
+        if cfg is not None:
+            res = lfast(frames, dict(cfg, n_levels=1))
+            l0 = f"{np.mean([len(res[p][0]) for p in frames]):.0f}"
+        print(f"| {n} | {np.mean(ates):.3f} | {min(ates):.3f} | {max(ates):.3f} | {kp} | {l0} |")
         sys.stdout.flush()
 
 
