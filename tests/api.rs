@@ -103,9 +103,14 @@ fn check_fields_and_order(kps: &[KeyPoint], cfg: &Config, what: &str) {
         assert!((0.0..360.0).contains(&k.angle), "{what} {i}: angle {k:?}");
         assert_eq!(k.class_id, -1, "{what} {i}");
         assert!(k.response.is_finite(), "{what} {i}");
+        // a pixel centre, moved by a whole number of 1/16 steps up to 7/16 when snapped
+        let steps = if cfg.snap() > 0 { 7 } else { 0 };
         for v in [k.pt.x as f64 / s, k.pt.y as f64 / s] {
-            let f = v - v.floor();
-            assert!((f - 0.5).abs() < 1e-3, "{what} {i}: pt/s = {v} is not a pixel centre: {k:?}");
+            let q = (v - v.floor() - 0.5) * 16.0;
+            assert!(
+                (q - q.round()).abs() < 16e-3 && q.round().abs() <= steps as f64,
+                "{what} {i}: pt/s = {v} is not a pixel centre + k/16, |k| <= {steps}: {k:?}"
+            );
         }
         // inside the border at its level
         let (x, y) = keypoint_level_pixel(cfg, k);
