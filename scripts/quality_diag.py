@@ -11,7 +11,7 @@ Hamming matches within eps / min(common).
     python3 scripts/quality_diag.py [--data ../shared/data/homography] [--budget 500] [SECTION ...]
 
 Sections: levels, localisation, loss, candidates, swap, snap (default: all), and
-snaprank, variants, vo (VO ATE over five RANSAC seeds; needs ../kitti beside --data).
+snaprank, variants, rerank, vo (VO ATE over five RANSAC seeds; needs ../kitti beside --data).
 Needs numpy and opencv-python (cv2 FAST/ORB for the references, cv2.cornerHarris).
 """
 import argparse
@@ -454,6 +454,44 @@ def section_variants(a):
             allp.append((r, m))
         cell = lambda v: f"{100 * np.mean([x[0] for x in v]):.1f} / {100 * np.mean([x[1] for x in v]):.1f}"
         print(f"| {n} | " + " | ".join(cell(per[s]) for s in sc) + f" | {cell(allp)} |")
+        sys.stdout.flush()
+
+
+def section_rerank(a):
+    """The default's uncapped keypoints ranked for the cap by another score, top N."""
+    print(f"\n## rerank: the default's uncapped keypoints, top {a.budget} by another score (rep / MS)")
+    print("| ranking | " + " | ".join(s[0] for s in scenes(a.data)) + " | mean over pairs |")
+    print("|---|" + "---:|" * (len(scenes(a.data)) + 1))
+    paths = sorted({p for _, r, _, i, _ in all_pairs(a.data) for p in (r, i)})
+    res = lfast(paths, {})
+    eig = {}
+
+    def score_of(p, kind):
+        k = res[p][0]
+        if kind == "harris":
+            return k[:, 4]
+        if kind.startswith("harris x 1.2^"):
+            return k[:, 4] * SCALE ** (float(kind.split("^")[1].split()[0]) * k[:, 5])
+        if p not in eig:  # min eigenvalue (Shi-Tomasi), 7x7 block, on cv2-resized levels
+            eig[p] = [cv2.cornerMinEigenVal(x.astype(np.float32), 7, 3) for x in level_images(gray(p))]
+        out = np.zeros(len(k))
+        for i, (x, y, _, _, _, o, _) in enumerate(k):
+            m, s = eig[p][int(o)], SCALE ** int(o)
+            out[i] = m[min(int(np.floor(y / s + 1 / 32)), m.shape[0] - 1), min(int(np.floor(x / s + 1 / 32)), m.shape[1] - 1)]
+        return out
+
+    for kind in ("harris", "min eigenvalue", "harris x 1.2^-2 level", "harris x 1.2^-1 level", "harris x 1.2^1 level", "harris x 1.2^2 level"):
+        per, allp = {}, []
+        for name, ref, k, img, h in all_pairs(a.data):
+            sel = []
+            for p in (ref, img):
+                o = np.argsort(-score_of(p, kind), kind="stable")[:a.budget]
+                sel.append((res[p][0][o, :2], res[p][1][o]))
+            r, m, *_ = score(sel[0][0], sel[0][1], gray(ref).shape, sel[1][0], sel[1][1], gray(img).shape, h)
+            per.setdefault(name, []).append((r, m))
+            allp.append((r, m))
+        cell = lambda v: f"{100 * np.mean([x[0] for x in v]):.1f} / {100 * np.mean([x[1] for x in v]):.1f}"
+        print(f"| {kind} | " + " | ".join(cell(per[s[0]]) for s in scenes(a.data)) + f" | {cell(allp)} |")
         sys.stdout.flush()
 
 
