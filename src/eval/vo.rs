@@ -148,8 +148,7 @@ pub fn run(opts: &Options) -> Result<()> {
     let seeds = if opts.quick { &SEEDS[..1] } else { &SEEDS[..] };
     let mut runs = Vec::new();
     for &seed in seeds {
-        let base =
-            VoOptions { ransac: crate::vo::geometry::RansacOptions { seed, ..base.ransac.clone() }, ..base.clone() };
+        let base = VoOptions { ransac: crate::vo::geometry::RansacOptions { seed, ..base.ransac }, ..base.clone() };
         for v in Variant::ALL {
             let o = VoOptions { config: v.config(), ..base.clone() };
             let t = crate::vo::run_suite(&seq, &[FrontEnd::Lfast], &o, None).map_err(vo_err)?;
