@@ -73,21 +73,6 @@ dispatch! {
         let mut ring = vec![i32::MIN; side * width];
         // row y's ring row is y % side, computed once per row (a division costs more than the compares)
         let mut slots = RowSlots { side, y: u32::MAX, at: 0 };
-        // per row j of the square and chunk c of its lanes: where a greater
-        // key beats p (the square's lanes), where an equal one does (earlier positions)
-        let lane_masks = |earlier: bool| -> Vec<[i32; LANES]> {
-            (0..side * chunks)
-                .map(|k| {
-                    let (j, c) = (k / chunks, k % chunks);
-                    std::array::from_fn(|i| {
-                        let lane = c * LANES + i;
-                        let on = lane < side && (!earlier || j < r as usize || (j == r as usize && lane < r as usize));
-                        on as i32
-                    })
-                })
-                .collect()
-        };
-        let (gt_mask, eq_mask) = (lane_masks(false), lane_masks(true));
         let (mut ins, mut del) = (0, 0);
         let mut keep = Vec::new();
         let (mut ins_slots, mut del_slots) = (slots, slots);
@@ -106,7 +91,7 @@ dispatch! {
             let kp = ordered_key(resp[p]);
             // the ring row of y - r (rows above the top hold no key)
             let top = (slots.of(py) + side - r as usize) % side;
-            let sq = Square { ring: &ring, width, top, x: px as usize, gt: &gt_mask, eq: &eq_mask };
+            let sq = Square { ring: &ring, width, top, x: px as usize };
             // radius 3 (the default) with constants, so that the compares unroll
             let beaten = if side == 7 { sq.beaten(kp, 7, 1) } else { sq.beaten(kp, side, chunks) };
             if !beaten {
@@ -125,23 +110,39 @@ struct Square<'a> {
     top: usize,
     /// the square's left column in the ring (which is padded by r)
     x: usize,
-    gt: &'a [[i32; LANES]],
-    eq: &'a [[i32; LANES]],
 }
 
 impl Square<'_> {
-    /// Whether a key in the square beats `kp`: greater where `gt` is on, equal where `eq` is.
+    /// Whether a key in the square beats `kp`: a greater one, or an equal one
+    /// at an earlier position. One compare per lane against a threshold:
+    /// `kp - 1` where equal beats (the rows above, the left of p's row), `kp`
+    /// where only greater does, `i32::MAX` on lanes past the square.
     #[inline(always)]
     fn beaten(&self, kp: i32, side: usize, chunks: usize) -> bool {
+        let r = side / 2;
         let mut acc = [0i32; LANES];
-        for j in 0..side {
-            let sl = if self.top + j >= side { self.top + j - side } else { self.top + j };
-            let row = &self.ring[sl * self.width + self.x..];
-            for c in 0..chunks {
-                let v: &[i32; LANES] = row[c * LANES..][..LANES].try_into().expect("LANES keys");
-                let (gm, em) = (&self.gt[j * chunks + c], &self.eq[j * chunks + c]);
+        for c in 0..chunks {
+            let threshold = |earlier: usize| -> [i32; LANES] {
+                std::array::from_fn(|i| match c * LANES + i {
+                    lane if lane >= side => i32::MAX,
+                    lane if lane < earlier => kp - 1,
+                    _ => kp,
+                })
+            };
+            let (above, centre, below) = (threshold(side), threshold(r), threshold(0));
+            for j in 0..side {
+                let t = if j < r {
+                    &above
+                } else if j == r {
+                    &centre
+                } else {
+                    &below
+                };
+                let sl = if self.top + j >= side { self.top + j - side } else { self.top + j };
+                let v: &[i32; LANES] =
+                    self.ring[sl * self.width + self.x + c * LANES..][..LANES].try_into().expect("LANES keys");
                 for i in 0..LANES {
-                    acc[i] |= ((v[i] > kp) as i32 & gm[i]) | ((v[i] == kp) as i32 & em[i]);
+                    acc[i] |= (v[i] > t[i]) as i32;
                 }
             }
         }
