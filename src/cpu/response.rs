@@ -95,7 +95,7 @@ dispatch! {
 /// let img = Plane::from_vec(12, 11, (0..132u32).map(|i| (i * i % 251) as u8).collect()).unwrap();
 /// let sq = harris_3x3(&img, 5, 5).unwrap();
 /// assert_eq!(sq[0][2], harris(&img, 6, 4));
-/// assert!(harris_3x3(&img, 6, 5).is_none()); // x + 5 is outside
+/// assert!(harris_3x3(&img, 7, 5).is_none()); // x + 5 = 12 is outside
 /// ```
 pub fn harris_3x3(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 3]; 3]> {
     let (w, h) = (img.width as usize, img.height as usize);
