@@ -1,5 +1,7 @@
 //! SPEC 9: non-maximum suppression among corner candidates. Mirrors shaders/corner_nms.wgsl.
 
+use super::simd::dispatch;
+
 /// True iff candidate `q` beats candidate `p`: a greater response, or an equal
 /// one and an earlier (y, x) position, so exactly one of a tied group survives.
 #[inline]
@@ -9,13 +11,147 @@ pub fn beats(rq: f32, q: [u32; 2], rp: f32, p: [u32; 2]) -> bool {
 
 /// Indices of the candidates that no other candidate within the (2r+1)^2
 /// square beats. `cands` in any order; the result is in input order. The
-/// level size is the shader's dispatch size; this sparse version needs only the candidates.
+/// level size is the shader's dispatch size; the CPU needs only the candidates.
+/// In raster order (as [`crate::cpu::lfast::lfast`] gives them), at distinct
+/// positions and with no NaN response, a dense window of rows decides
+/// ([`raster_nms`]); otherwise a sparse walk over the candidates does.
 ///
 /// ```
 /// let keep = lfast::cpu::corner_nms::corner_nms(10, 10, &[[2, 2], [3, 3], [9, 9]], &[1.0, 2.0, 0.5], 1);
 /// assert_eq!(keep, vec![1, 2]);
 /// ```
 pub fn corner_nms(_width: u32, _height: u32, cands: &[[u32; 2]], resp: &[f32], r: u32) -> Vec<usize> {
+    let raster = cands.windows(2).all(|w| (w[0][1], w[0][0]) < (w[1][1], w[1][0]));
+    if raster && cands.len() < u32::MAX as usize && !resp.iter().any(|v| v.is_nan()) {
+        return raster_nms(cands, resp, r);
+    }
+    corner_nms_sparse(cands, resp, r)
+}
+
+/// An order-preserving map of a non-NaN f32 to i32 (-0.0 and 0.0 alike; every
+/// value above `i32::MIN`, which stands for "no candidate"), so that comparing
+/// responses is comparing integers.
+#[inline(always)]
+fn ordered_key(v: f32) -> i32 {
+    let b = (v + 0.0).to_bits();
+    (if b >> 31 == 1 { !b } else { b | 1 << 31 } ^ 1 << 31) as i32
+}
+
+/// `y % side`, recomputed only when y changes.
+#[derive(Clone, Copy)]
+struct RowSlots {
+    side: usize,
+    y: u32,
+    at: usize,
+}
+
+impl RowSlots {
+    #[inline(always)]
+    fn of(&mut self, y: u32) -> usize {
+        if y != self.y {
+            (self.y, self.at) = (y, y as usize % self.side);
+        }
+        self.at
+    }
+}
+
+/// Lanes per compare of [`raster_nms`] (8 x i32: one AVX2 register).
+const LANES: usize = 8;
+
+dispatch! {
+    /// [`corner_nms`] for candidates in strict raster order with no NaN
+    /// response. A ring of 2r + 1 dense rows of response keys
+    /// ([`ordered_key`]), padded by r on the left, holds the candidates of
+    /// the rows within r of the current one. p is beaten by a greater key in
+    /// its square, or an equal one at an earlier position (a row above, or
+    /// left in its own row): [`beats`], decided by compares 8 lanes at a time
+    /// without a branch.
+    fn raster_nms(cands: &[[u32; 2]], resp: &[f32], r: u32) -> Vec<usize> {
+        let side = 2 * r as usize + 1;
+        let chunks = side.div_ceil(LANES);
+        let width = cands.iter().map(|c| c[0] as usize).max().map_or(0, |x| x + 1 + chunks * LANES);
+        let mut ring = vec![i32::MIN; side * width];
+        // row y's ring row is y % side, computed once per row (a division costs more than the compares)
+        let mut slots = RowSlots { side, y: u32::MAX, at: 0 };
+        let (mut ins, mut del) = (0, 0);
+        let mut keep = Vec::new();
+        let (mut ins_slots, mut del_slots) = (slots, slots);
+        for (p, &[px, py]) in cands.iter().enumerate() {
+            // rows y - r..=y + r in the ring, and none other
+            while del < ins && cands[del][1] + r < py {
+                let [x, y] = cands[del];
+                ring[del_slots.of(y) * width + r as usize + x as usize] = i32::MIN;
+                del += 1;
+            }
+            while ins < cands.len() && cands[ins][1] <= py.saturating_add(r) {
+                let [x, y] = cands[ins];
+                ring[ins_slots.of(y) * width + r as usize + x as usize] = ordered_key(resp[ins]);
+                ins += 1;
+            }
+            let kp = ordered_key(resp[p]);
+            // the ring row of y - r (rows above the top hold no key)
+            let top = (slots.of(py) + side - r as usize) % side;
+            let sq = Square { ring: &ring, width, top, x: px as usize };
+            // radius 3 (the default) with constants, so that the compares unroll
+            let beaten = if side == 7 { sq.beaten(kp, 7, 1) } else { sq.beaten(kp, side, chunks) };
+            if !beaten {
+                keep.push(p);
+            }
+        }
+        keep
+    }
+}
+
+/// The square of one candidate in [`raster_nms`]'s ring.
+struct Square<'a> {
+    ring: &'a [i32],
+    width: usize,
+    /// the ring row of the square's top row
+    top: usize,
+    /// the square's left column in the ring (which is padded by r)
+    x: usize,
+}
+
+impl Square<'_> {
+    /// Whether a key in the square beats `kp`: a greater one, or an equal one
+    /// at an earlier position. One compare per lane against a threshold:
+    /// `kp - 1` where equal beats (the rows above, the left of p's row), `kp`
+    /// where only greater does, `i32::MAX` on lanes past the square.
+    #[inline(always)]
+    fn beaten(&self, kp: i32, side: usize, chunks: usize) -> bool {
+        let r = side / 2;
+        let mut acc = [0i32; LANES];
+        for c in 0..chunks {
+            let threshold = |earlier: usize| -> [i32; LANES] {
+                std::array::from_fn(|i| match c * LANES + i {
+                    lane if lane >= side => i32::MAX,
+                    lane if lane < earlier => kp - 1,
+                    _ => kp,
+                })
+            };
+            let (above, centre, below) = (threshold(side), threshold(r), threshold(0));
+            for j in 0..side {
+                let t = if j < r {
+                    &above
+                } else if j == r {
+                    &centre
+                } else {
+                    &below
+                };
+                let sl = if self.top + j >= side { self.top + j - side } else { self.top + j };
+                let v: &[i32; LANES] =
+                    self.ring[sl * self.width + self.x + c * LANES..][..LANES].try_into().expect("LANES keys");
+                for i in 0..LANES {
+                    acc[i] |= (v[i] > t[i]) as i32;
+                }
+            }
+        }
+        acc.iter().fold(0, |a, &b| a | b) != 0
+    }
+}
+
+/// [`corner_nms`] for candidates in any order, with duplicate positions or NaN responses.
+fn corner_nms_sparse(cands: &[[u32; 2]], resp: &[f32], r: u32) -> Vec<usize> {
     // Visit candidates in raster order, a row at a time. The rows within r of
     // the current row form a window that only moves down; in each of them a
     // cursor skips the candidates left of x - r, and only moves right as x
@@ -91,6 +227,30 @@ mod tests {
             // few distinct responses to force ties
             let resp: Vec<f32> = (0..cands.len()).map(|i| ((i as u64 * 7 + seed) % 5) as f32).collect();
             let got = corner_nms(24, 24, &cands, &resp, r);
+            let want: Vec<usize> = (0..cands.len()).filter(|&i| {
+                !(0..cands.len()).any(|j| j != i
+                    && cands[j][0].abs_diff(cands[i][0]) <= r && cands[j][1].abs_diff(cands[i][1]) <= r
+                    && beats(resp[j], cands[j], resp[i], cands[i]))
+            }).collect();
+            proptest::prop_assert_eq!(got, want);
+        }
+
+        #[test]
+        fn matches_naive_in_raster_order(pts in proptest::collection::vec((0u32..70, 0u32..40), 0..300), r in 0u32..10,
+                                         seed in 0u64..1000) {
+            // the fast case: raster order as L-FAST gives it, duplicates allowed;
+            // responses with ties, -0.0 against 0.0, and NaN (which never beats nor loses)
+            // (distinct positions and no NaN, 2 cases in 3: the dense path)
+            let mut cands: Vec<[u32; 2]> = pts.iter().map(|&(x, y)| [x, y]).collect();
+            cands.sort_unstable_by_key(|c| (c[1], c[0]));
+            let dense = seed % 3 != 0;
+            if dense {
+                cands.dedup();
+            }
+            let vals = [0.0, -0.0, 1.0, 2.0, -1.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN];
+            let nv = if dense { 7 } else { 8 };
+            let resp: Vec<f32> = (0..cands.len()).map(|i| vals[((i as u64 * 13 + seed) % nv) as usize]).collect();
+            let got = corner_nms(70, 40, &cands, &resp, r);
             let want: Vec<usize> = (0..cands.len()).filter(|&i| {
                 !(0..cands.len()).any(|j| j != i
                     && cands[j][0].abs_diff(cands[i][0]) <= r && cands[j][1].abs_diff(cands[i][1]) <= r

@@ -85,6 +85,77 @@ dispatch! {
     }
 }
 
+/// [`harris`] at the 3x3 square centred on (x, y): `out[j][i]` at
+/// (x - 1 + i, y - 1 + j). `None` unless the square's footprint, x-5..=x+5 by
+/// y-5..=y+5, lies inside the image. The nine 7x7 blocks overlap: their
+/// gradients are computed once and summed by columns ([`sums_3x3`]).
+///
+/// ```
+/// use lfast::{Plane, cpu::response::{harris, harris_3x3}};
+/// let img = Plane::from_vec(12, 11, (0..132u32).map(|i| (i * i % 251) as u8).collect()).unwrap();
+/// let sq = harris_3x3(&img, 5, 5).unwrap();
+/// assert_eq!(sq[0][2], harris(&img, 6, 4));
+/// assert!(harris_3x3(&img, 7, 5).is_none()); // x + 5 = 12 is outside
+/// ```
+pub fn harris_3x3(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 3]; 3]> {
+    let (w, h) = (img.width as usize, img.height as usize);
+    let (x, y) = (x as usize, y as usize);
+    if x < 5 || y < 5 || x + 5 >= w || y + 5 >= h {
+        return None;
+    }
+    let mut rows = [[0u8; 18]; 11];
+    for (r, row) in rows.iter_mut().enumerate() {
+        row[..11].copy_from_slice(&img.data[(y - 5 + r) * w + x - 5..][..11]);
+    }
+    let [a, b, c] = sums_3x3(&rows);
+    Some(std::array::from_fn(|j| std::array::from_fn(|i| harris_from_sums(a[j][i], b[j][i], c[j][i]))))
+}
+
+dispatch! {
+    /// The structure-tensor sums `[a, b, c]` of the nine 7x7 blocks centred on
+    /// the 3x3 square, `[j][i]` at (i, j) of the square, from the 11 rows of
+    /// its footprint (11 pixels, zero-padded to 18). As [`sums_9x9`]: per
+    /// footprint row `h` and `s`, then Ix, Iy and their products at the 9x9
+    /// gradient pixels (16 lanes, 9 used); then 7-row column sums for each row
+    /// of the square, and 7-column sums of those.
+    fn sums_3x3(rows: &[[u8; 18]; 11]) -> [[[i32; 3]; 3]; 3] {
+        let mut h = [[0i32; 16]; 11];
+        let mut s = [[0i32; 16]; 11];
+        for (r, row) in rows.iter().enumerate() {
+            for i in 0..16 {
+                let (l, m, rt) = (row[i] as i32, row[i + 1] as i32, row[i + 2] as i32);
+                h[r][i] = rt - l;
+                s[r][i] = l + 2 * m + rt;
+            }
+        }
+        let mut p = [[[0i32; 16]; 9]; 3];
+        for g in 0..9 {
+            for i in 0..16 {
+                let ix = h[g][i] + 2 * h[g + 1][i] + h[g + 2][i];
+                let iy = s[g + 2][i] - s[g][i];
+                p[0][g][i] = ix * ix;
+                p[1][g][i] = iy * iy;
+                p[2][g][i] = ix * iy;
+            }
+        }
+        let mut out = [[[0i32; 3]; 3]; 3];
+        for (o, p) in out.iter_mut().zip(&p) {
+            for (j, o) in o.iter_mut().enumerate() {
+                let mut col = [0i32; 16];
+                for row in &p[j..j + 7] {
+                    for i in 0..16 {
+                        col[i] += row[i];
+                    }
+                }
+                for (i, o) in o.iter_mut().enumerate() {
+                    *o = col[i..i + 7].iter().sum();
+                }
+            }
+        }
+        out
+    }
+}
+
 /// OpenCV's Harris response from the integer sums, with its scaling.
 #[inline]
 pub fn harris_from_sums(a: i32, b: i32, c: i32) -> f32 {
@@ -155,6 +226,49 @@ mod tests {
                     let want = structure_sums_clamped(&img, x, y);
                     proptest::prop_assert_eq!(structure_sums(&img, x as u32, y as u32), want, "({}, {})", x, y);
                 }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(60))]
+        #[test]
+        fn square_matches_harris(w in 11u32..40, h in 11u32..30, seed in proptest::prelude::any::<u64>(),
+                                 levels in 1u64..256) {
+            // every centre, the ones too near a side included (None there)
+            let mut r = crate::rng::SplitMix64::new(seed);
+            let px = (0..w * h).map(|_| (r.next_u64() % levels * 255 / (levels - 1).max(1)) as u8).collect();
+            let img = Plane::from_vec(w, h, px).unwrap();
+            for y in 0..h {
+                for x in 0..w {
+                    let inside = x >= 5 && y >= 5 && x + 5 < w && y + 5 < h;
+                    match harris_3x3(&img, x, y) {
+                        None => proptest::prop_assert!(!inside, "({}, {})", x, y),
+                        Some(sq) => {
+                            proptest::prop_assert!(inside);
+                            for j in 0..3 {
+                                for i in 0..3 {
+                                    let want = harris(&img, x + i - 1, y + j - 1);
+                                    proptest::prop_assert_eq!(sq[j as usize][i as usize].to_bits(), want.to_bits());
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn square_at_extreme_contrast() {
+        // a checkerboard of 0 and 255: the largest gradients, sums near i32's range
+        let img =
+            Plane::from_vec(11, 11, (0..121u32).map(|i| if (i % 11 + i / 11) % 2 == 0 { 255 } else { 0 }).collect())
+                .unwrap();
+        let sq = harris_3x3(&img, 5, 5).unwrap();
+        for j in 0..3 {
+            for i in 0..3 {
+                assert_eq!(sq[j as usize][i as usize].to_bits(), harris(&img, 4 + i, 4 + j).to_bits());
             }
         }
     }

@@ -14,7 +14,7 @@
 //! (where the corner test runs) and, with a mask, where the level mask is on
 //! are candidates (the corner's own pixel always is).
 
-use super::response::harris;
+use super::response::{harris, harris_3x3};
 use super::select::Corner;
 use crate::image::Plane;
 
@@ -39,7 +39,13 @@ pub fn snap(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32, border: 
     let (x0, y0) = (c.x.saturating_sub(s).max(border), c.y.saturating_sub(s).max(border));
     let (x1, y1) =
         ((c.x + s).min(d.width.saturating_sub(border + 1)), (c.y + s).min(d.height.saturating_sub(border + 1)));
-    let mut best = Corner { response: harris(d, c.x, c.y), sub: [0, 0], ..c };
+    // radius 1 (the default): the square's nine responses at once, where its footprint is inside
+    let square = if s == 1 { harris_3x3(d, c.x, c.y) } else { None };
+    let resp = |x: u32, y: u32| match square {
+        Some(sq) if x.abs_diff(c.x) <= 1 && y.abs_diff(c.y) <= 1 => sq[(y + 1 - c.y) as usize][(x + 1 - c.x) as usize],
+        _ => harris(d, x, y),
+    };
+    let mut best = Corner { response: resp(c.x, c.y), sub: [0, 0], ..c };
     if s == 0 {
         return best;
     }
@@ -59,7 +65,7 @@ pub fn snap(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32, border: 
             if (x, y) == (c.x, c.y) || mask.is_some_and(|m| m.at(x, y) == 0) {
                 continue;
             }
-            let r = harris(d, x, y);
+            let r = resp(x, y);
             if let Some(i) = slot(x, y) {
                 seen[i] = r;
             }
@@ -70,7 +76,7 @@ pub fn snap(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32, border: 
     }
     let at = |x: u32, y: u32| match slot(x, y) {
         Some(i) if !seen[i].is_nan() => seen[i],
-        _ => harris(d, x, y),
+        _ => resp(x, y),
     };
     let (x, y, r0) = (best.x, best.y, best.response);
     let qx = if x >= 1 && x + 1 < d.width { subpixel(at(x - 1, y), r0, at(x + 1, y)) } else { 0 };
