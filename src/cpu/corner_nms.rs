@@ -219,6 +219,20 @@ mod tests {
         assert_eq!(corner_nms(30, 30, &c, &r, 2), vec![0, 1, 2]);
     }
 
+    /// The definition: a candidate survives iff no other within its (2r+1)^2 square beats it.
+    fn naive(cands: &[[u32; 2]], resp: &[f32], r: u32) -> Vec<usize> {
+        (0..cands.len())
+            .filter(|&i| {
+                !(0..cands.len()).any(|j| {
+                    j != i
+                        && cands[j][0].abs_diff(cands[i][0]) <= r
+                        && cands[j][1].abs_diff(cands[i][1]) <= r
+                        && beats(resp[j], cands[j], resp[i], cands[i])
+                })
+            })
+            .collect()
+    }
+
     proptest::proptest! {
         #[test]
         fn matches_naive(pts in proptest::collection::vec((0u32..24, 0u32..24), 0..80), r in 0u32..5, seed in 0u64..1000) {
@@ -227,12 +241,7 @@ mod tests {
             // few distinct responses to force ties
             let resp: Vec<f32> = (0..cands.len()).map(|i| ((i as u64 * 7 + seed) % 5) as f32).collect();
             let got = corner_nms(24, 24, &cands, &resp, r);
-            let want: Vec<usize> = (0..cands.len()).filter(|&i| {
-                !(0..cands.len()).any(|j| j != i
-                    && cands[j][0].abs_diff(cands[i][0]) <= r && cands[j][1].abs_diff(cands[i][1]) <= r
-                    && beats(resp[j], cands[j], resp[i], cands[i]))
-            }).collect();
-            proptest::prop_assert_eq!(got, want);
+            proptest::prop_assert_eq!(got, naive(&cands, &resp, r));
         }
 
         #[test]
@@ -251,12 +260,7 @@ mod tests {
             let nv = if dense { 7 } else { 8 };
             let resp: Vec<f32> = (0..cands.len()).map(|i| vals[((i as u64 * 13 + seed) % nv) as usize]).collect();
             let got = corner_nms(70, 40, &cands, &resp, r);
-            let want: Vec<usize> = (0..cands.len()).filter(|&i| {
-                !(0..cands.len()).any(|j| j != i
-                    && cands[j][0].abs_diff(cands[i][0]) <= r && cands[j][1].abs_diff(cands[i][1]) <= r
-                    && beats(resp[j], cands[j], resp[i], cands[i]))
-            }).collect();
-            proptest::prop_assert_eq!(got, want);
+            proptest::prop_assert_eq!(got, naive(&cands, &resp, r));
         }
     }
 }

@@ -212,15 +212,20 @@ mod tests {
         }
     }
 
+    /// A random w x h image with `levels` grey levels spread over 0..=255.
+    fn random_levels(w: u32, h: u32, seed: u64, levels: u64) -> Plane<u8> {
+        let mut r = crate::rng::SplitMix64::new(seed);
+        let px = (0..w * h).map(|_| (r.next_u64() % levels * 255 / (levels - 1).max(1)) as u8).collect();
+        Plane::from_vec(w, h, px).unwrap()
+    }
+
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(100))]
         #[test]
         fn inside_path_matches_clamped_reads_random(w in 9u32..40, h in 9u32..30, seed in proptest::prelude::any::<u64>(),
                                                     levels in 1u64..256) {
             // random images with few or many grey levels, every pixel tested
-            let mut r = crate::rng::SplitMix64::new(seed);
-            let px = (0..w * h).map(|_| (r.next_u64() % levels * 255 / (levels - 1).max(1)) as u8).collect();
-            let img = Plane::from_vec(w, h, px).unwrap();
+            let img = random_levels(w, h, seed, levels);
             for y in 0..h as i32 {
                 for x in 0..w as i32 {
                     let want = structure_sums_clamped(&img, x, y);
@@ -236,9 +241,7 @@ mod tests {
         fn square_matches_harris(w in 11u32..40, h in 11u32..30, seed in proptest::prelude::any::<u64>(),
                                  levels in 1u64..256) {
             // every centre, the ones too near a side included (None there)
-            let mut r = crate::rng::SplitMix64::new(seed);
-            let px = (0..w * h).map(|_| (r.next_u64() % levels * 255 / (levels - 1).max(1)) as u8).collect();
-            let img = Plane::from_vec(w, h, px).unwrap();
+            let img = random_levels(w, h, seed, levels);
             for y in 0..h {
                 for x in 0..w {
                     let inside = x >= 5 && y >= 5 && x + 5 < w && y + 5 < h;
