@@ -14,7 +14,7 @@ pub fn beats(rq: f32, q: [u32; 2], rp: f32, p: [u32; 2]) -> bool {
 /// level size is the shader's dispatch size; the CPU needs only the candidates.
 /// In raster order (as [`crate::cpu::lfast::lfast`] gives them), at distinct
 /// positions and with no NaN response, a dense window of rows decides
-/// ([`raster_nms`]); otherwise a sparse walk over the candidates does.
+/// (`raster_nms`); otherwise a sparse walk over the candidates does.
 ///
 /// ```
 /// let keep = lfast::cpu::corner_nms::corner_nms(10, 10, &[[2, 2], [3, 3], [9, 9]], &[1.0, 2.0, 0.5], 1);

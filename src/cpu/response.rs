@@ -88,7 +88,7 @@ dispatch! {
 /// [`harris`] at the 3x3 square centred on (x, y): `out[j][i]` at
 /// (x - 1 + i, y - 1 + j). `None` unless the square's footprint, x-5..=x+5 by
 /// y-5..=y+5, lies inside the image. The nine 7x7 blocks overlap: their
-/// gradients are computed once and summed by columns ([`sums_3x3`]).
+/// gradients are computed once and summed by columns (`sums_3x3`).
 ///
 /// ```
 /// use lfast::{Plane, cpu::response::{harris, harris_3x3}};
