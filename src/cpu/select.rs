@@ -15,7 +15,7 @@ pub struct Corner {
     pub y: u32,
     /// Harris response.
     pub response: f32,
-    /// Sub-pixel offset of the snapped corner, in 1/[`SUBPIXEL`](crate::cpu::snap::SUBPIXEL)
+    /// Sub-pixel offset of the snapped corner, in 1/[`SUBPIXEL`](crate::spec::SUBPIXEL)
     /// of a level pixel, each in `-7..=7` ([`crate::cpu::snap`]); `[0, 0]` without snap.
     pub sub: [i8; 2],
 }

@@ -85,11 +85,7 @@ pub fn snap(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32, border: 
     best
 }
 
-/// Sub-pixel steps per level pixel of [`Corner::sub`].
-pub const SUBPIXEL: i32 = 16;
-/// The largest sub-pixel offset, in steps: 7/16 px keeps the position inside
-/// its pixel ([`crate::spec::level_pixel`] maps it back to the same pixel).
-pub const SUBPIXEL_MAX: i8 = 7;
+pub use crate::spec::{SUBPIXEL, SUBPIXEL_MAX};
 /// Snap radii whose responses [`snap`] keeps for the sub-pixel fit.
 const CACHED: u32 = 2;
 /// (2 CACHED + 3)^2.

@@ -20,6 +20,13 @@
 use crate::config::Config;
 use crate::keypoint::KeyPoint;
 
+/// Sub-pixel steps per level pixel of a snapped corner's offset
+/// (`Corner::sub`, `GpuKeypoint::sub`; src/cpu/snap.rs, shaders/snap.wgsl).
+pub const SUBPIXEL: i32 = 16;
+/// The largest sub-pixel offset, in steps: 7/16 px keeps the position inside
+/// its pixel ([`level_pixel`] maps it back to the same pixel).
+pub const SUBPIXEL_MAX: i8 = 7;
+
 /// Position of an L-FAST corner within its pixel.
 pub const LFAST_CENTRE: f64 = 0.5;
 /// Position of a FAST/ORB corner within its pixel (OpenCV's convention).
@@ -36,7 +43,7 @@ pub fn keypoint_at(level: u32, x: u32, y: u32, s: f64, centre: f64, angle: f32, 
 }
 
 /// [`keypoint_at`] of level pixel `p` moved by `sub / 16` of a pixel
-/// ([`crate::cpu::snap::SUBPIXEL`] steps), still computed in f64 and rounded once.
+/// ([`SUBPIXEL`] steps), still computed in f64 and rounded once.
 ///
 /// ```
 /// let k = lfast::spec::keypoint_at_sub(0, [10, 4], [4, -2], 1.0, lfast::spec::LFAST_CENTRE, 0.0, 0.0);
@@ -52,7 +59,7 @@ pub fn keypoint_at_sub(
     angle: f32,
     response: f32,
 ) -> KeyPoint {
-    let step = crate::cpu::snap::SUBPIXEL as f64;
+    let step = SUBPIXEL as f64;
     let at = |x: u32, q: i8| ((x as f64 + centre + q as f64 / step) * s) as f32;
     KeyPoint {
         pt: glam::Vec2::new(at(p[0], sub[0]), at(p[1], sub[1])),
@@ -101,7 +108,7 @@ mod tests {
                     assert_eq!(keypoint_level_pixel(&cfg, &k), (x, h - 1), "level {l} x {x} centre {centre}");
                 }
             }
-            let m = crate::cpu::snap::SUBPIXEL_MAX;
+            let m = SUBPIXEL_MAX;
             for x in 0..w {
                 for q in -m..=m {
                     let k = keypoint_at_sub(l as u32, [x, h - 1], [q, -q], s, LFAST_CENTRE, 0.0, 0.0);

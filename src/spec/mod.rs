@@ -22,7 +22,10 @@ pub mod pattern;
 pub mod quotas;
 pub mod windows;
 
-pub use keypoint::{LFAST_CENTRE, OPENCV_CENTRE, keypoint_at, keypoint_at_sub, keypoint_level_pixel, level_pixel};
+pub use keypoint::{
+    LFAST_CENTRE, OPENCV_CENTRE, SUBPIXEL, SUBPIXEL_MAX, keypoint_at, keypoint_at_sub, keypoint_level_pixel,
+    level_pixel,
+};
 pub use mask::{level_mask, mask_radius};
 pub use quotas::level_quotas;
 pub use windows::{WindowLayout, cell_cuts, nearest_windows, window_origins};
