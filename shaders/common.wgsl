@@ -40,6 +40,7 @@ struct Params {
     tile_row: u32,      // workgroups per row of the tile list (the device's limit)
     cells: u32,         // offset in `grid` of the SPEC 5 cells (FrameLayout::grid_data)
     snap_radius: u32,   // corners move to the Harris maximum within this radius (snap.wgsl)
+    reject_edges: u32,  // 1: a response not above 0 does not survive corner NMS (corner_nms.wgsl)
 }
 
 @group(0) @binding(0) var<uniform> P: Params;

@@ -32,6 +32,9 @@ fn suppress(l: u32, p: vec2<u32>) {
     let h = lh(l);
     let i = loff(l) + p.y * w + p.x;
     let rp = bitcast<f32>(resp[i]);
+    // Config::reject_edges: Harris's edge (or NaN) is no corner. It could not
+    // beat a positive candidate, so dropping it here changes no other survivor.
+    if (P.reject_edges != 0u && !(rp > 0.0)) { return; }
     // The (2r+1)^2 square, cut to the level (outside it there are no candidates).
     let r = P.nms_radius;
     let x0 = select(0u, p.x - r, p.x >= r);

@@ -96,6 +96,13 @@ pub struct Config {
     /// 0..=16; at most `nms_radius / 2` is used ([`Config::snap`]), which keeps
     /// positions distinct (docs/quality.md).
     pub snap_radius: u32,
+    /// Beyond the paper: drop a candidate whose Harris response (SPEC 9) is not
+    /// above 0, Harris and Stephens' sign for an edge (the smaller eigenvalue of
+    /// the structure tensor under ~4% of the larger one at k = 0.04), before
+    /// corner NMS. A ratio of eigenvalues, so it does not depend on contrast;
+    /// such a candidate cannot beat a positive one, so the positive survivors
+    /// are the same as without it (docs/quality.md).
+    pub reject_edges: bool,
 }
 
 /// Denominator of the rational `delta` (SPEC 1): `delta_num = round(delta * DELTA_DEN)`.
@@ -118,6 +125,7 @@ impl Default for Config {
             orientation_bins: 30,
             descriptor: DescriptorKind::Lfast,
             snap_radius: 1,
+            reject_edges: false,
         }
     }
 }
@@ -190,15 +198,16 @@ impl Config {
     }
 
     /// The paper's pipeline literally (SPEC 1-10 as written): `mode = "paper"`,
-    /// `support = 4` ("more than three" neighbours), no snap, the other fields
-    /// at their defaults. Its output does not move when the defaults do.
+    /// `support = 4` ("more than three" neighbours), no snap, every corner
+    /// whatever the sign of its response, the other fields at their defaults.
+    /// Its output does not move when the defaults do.
     ///
     /// ```
     /// let p = lfast::Config::paper();
-    /// assert_eq!((p.mode, p.support, p.snap_radius), (lfast::Mode::Paper, 4, 0));
+    /// assert_eq!((p.mode, p.support, p.snap_radius, p.reject_edges), (lfast::Mode::Paper, 4, 0, false));
     /// ```
     pub fn paper() -> Self {
-        Self { mode: Mode::Paper, support: 4, snap_radius: 0, ..Self::default() }
+        Self { mode: Mode::Paper, support: 4, snap_radius: 0, reject_edges: false, ..Self::default() }
     }
 
     /// The snap radius the pipeline uses: `min(snap_radius, nms_radius / 2)`.

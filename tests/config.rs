@@ -8,10 +8,11 @@ fn defaults_are_the_spec_values() {
     let c = Config::default();
     assert_eq!(c.delta, 0.1);
     assert_eq!(c.alpha_pct, 35);
-    // mode, support and snap_radius as the evaluation chose them (docs/evaluation.md)
+    // mode, support, snap_radius and reject_edges as the evaluation chose them (docs/evaluation.md)
     assert_eq!(c.mode, Mode::Paper);
     assert_eq!(c.support, 3);
     assert_eq!(c.snap_radius, 1);
+    assert!(!c.reject_edges);
     assert_eq!(c.straight_tol, 1);
     assert_eq!(c.border, 16);
     assert_eq!(c.nms_radius, 3);
@@ -46,6 +47,7 @@ fn toml_round_trip() {
         orientation_bins: 0,
         descriptor: DescriptorKind::Opencv,
         snap_radius: 0,
+        reject_edges: false,
     };
     c.validate().unwrap();
     let text = c.to_toml_string();

@@ -208,8 +208,9 @@ fn corner_nms_matches_cpu_on_real_images() {
     let list = CandListPass::new(&ctx.device);
     for name in IMAGES {
         let img = data(name);
-        for r in [0, 1, 3] {
-            let cfg = Config { n_levels: 4, nms_radius: r, ..Config::default() };
+        // reject_edges both ways: the shader's early return == survivors()
+        for (r, reject_edges) in [(0, true), (1, false), (3, false), (3, true)] {
+            let cfg = Config { n_levels: 4, nms_radius: r, reject_edges, ..Config::default() };
             let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
             let levels = cpu_levels(&cfg, &img);
             let mut want = Vec::new();
@@ -221,7 +222,7 @@ fn corner_nms_matches_cpu_on_real_images() {
                     resp[(y * w + x) as usize] = v.to_bits();
                 }
                 t::upload_level(&ctx, &b, &b.resp, l, &resp);
-                for i in corner_nms::corner_nms(w, h, &lv.cands, &lv.resp, r) {
+                for i in corner_nms::survivors(&lv.cands, &lv.resp, r, cfg.reject_edges) {
                     let c = Corner {
                         level: l as u32,
                         x: lv.cands[i][0],
@@ -239,8 +240,8 @@ fn corner_nms_matches_cpu_on_real_images() {
             let mut got: Vec<[u32; 12]> = download_corners(&ctx, &b).iter().map(bits).collect();
             got.sort();
             want.sort();
-            assert_eq!(got.len(), want.len(), "{name} r={r}");
-            assert_eq!(got, want, "{name} r={r}");
+            assert_eq!(got.len(), want.len(), "{name} r={r} reject_edges={reject_edges}");
+            assert_eq!(got, want, "{name} r={r} reject_edges={reject_edges}");
             assert!(!want.is_empty(), "{name}");
         }
     }
@@ -257,7 +258,9 @@ fn corner_nms_breaks_ties_by_position() {
     let pool = [1.0f32, 2.0, -1.0, 0.0, -0.0, 2.0];
     for (w, h, levels, seed) in [(40, 40, 1, 1), (48, 40, 3, 2), (37, 29, 2, 3), (17, 1, 1, 4), (1, 1, 1, 5)] {
         for r in [0, 1, 2, 4] {
-            let cfg = Config { n_levels: levels, nms_radius: r, border: 7, ..Config::default() };
+            // -0.0, 0.0 and -1.0 are edges under reject_edges: alternate it
+            let reject_edges = (seed + r) % 2 == 0;
+            let cfg = Config { n_levels: levels, nms_radius: r, border: 7, reject_edges, ..Config::default() };
             let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
             let mut rng = Rng::new((seed * 1000 + r + 1).into());
             let mut want = Vec::new();
@@ -278,7 +281,7 @@ fn corner_nms_breaks_ties_by_position() {
                 }
                 t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(lw, lh, &cands));
                 t::upload_level(&ctx, &b, &b.resp, l, &rmap);
-                for i in corner_nms::corner_nms(lw, lh, &cands, &resp, r) {
+                for i in corner_nms::survivors(&cands, &resp, r, cfg.reject_edges) {
                     let c = Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i], sub: [0, 0] };
                     want.push(bits(&corner_kp(&cfg, &c)));
                 }
@@ -288,7 +291,7 @@ fn corner_nms_breaks_ties_by_position() {
             let mut got: Vec<[u32; 12]> = download_corners(&ctx, &b).iter().map(bits).collect();
             got.sort();
             want.sort();
-            assert_eq!(got, want, "{w}x{h} levels {levels} r={r}");
+            assert_eq!(got, want, "{w}x{h} levels {levels} r={r} reject_edges={reject_edges}");
         }
     }
 }
@@ -497,7 +500,7 @@ fn response_nms_select_chain_matches_cpu() {
                 let (w, h) = (lv.denoised.width, lv.denoised.height);
                 t::upload_packed(&ctx, &b, &b.denoised, l, &lv.denoised);
                 t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(w, h, &lv.cands));
-                let keep = corner_nms::corner_nms(w, h, &lv.cands, &lv.resp, cfg.nms_radius);
+                let keep = corner_nms::survivors(&lv.cands, &lv.resp, cfg.nms_radius, cfg.reject_edges);
                 per_level.push(
                     keep.iter()
                         .map(|&i| Corner {

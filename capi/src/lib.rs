@@ -103,6 +103,9 @@ pub struct LfastConfig {
     /// Beyond the paper: each corner moves to the Harris maximum within this many
     /// pixels (0 = stays on its edge pixel), 0..=16; at most `nms_radius / 2` is used.
     pub snap_radius: u32,
+    /// Beyond the paper: a candidate whose Harris response is not above 0 (an
+    /// edge, in Harris and Stephens' sense) is no corner.
+    pub reject_edges: bool,
 }
 
 impl From<&Config> for LfastConfig {
@@ -128,6 +131,7 @@ impl From<&Config> for LfastConfig {
                 DescriptorKind::Opencv => LfastDescriptorKind::Opencv as i32,
             },
             snap_radius: c.snap_radius,
+            reject_edges: c.reject_edges,
         }
     }
 }
@@ -169,6 +173,7 @@ impl LfastConfig {
             orientation_bins: self.orientation_bins,
             descriptor,
             snap_radius: self.snap_radius,
+            reject_edges: self.reject_edges,
         };
         cfg.validate()?;
         Ok(cfg)

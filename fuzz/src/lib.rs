@@ -128,6 +128,7 @@ pub fn config(r: &mut Bytes) -> Config {
         orientation_bins: r.pick(&[30, 0, 1, 2, 7, 360, 361]),
         descriptor: if r.u8() & 3 == 0 { DescriptorKind::Opencv } else { DescriptorKind::Lfast },
         snap_radius: r.pick(&[0, 0, 1, 2, 17]),
+        reject_edges: r.u8() & 1 == 1,
     }
 }
 

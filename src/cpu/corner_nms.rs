@@ -28,6 +28,29 @@ pub fn corner_nms(_width: u32, _height: u32, cands: &[[u32; 2]], resp: &[f32], r
     corner_nms_sparse(cands, resp, r)
 }
 
+/// The corner NMS stage as a [`crate::Config`] sets it: with `reject_edges`,
+/// the candidates whose Harris response is not above 0 (Harris and Stephens'
+/// edge; NaN too) are dropped first, as the early return of
+/// shaders/corner_nms.wgsl `suppress` does. None of them could beat a positive
+/// candidate, so the survivors are [`corner_nms`]'s positive ones. Indices into
+/// `cands`, in input order.
+///
+/// ```
+/// use lfast::cpu::corner_nms::survivors;
+/// let (c, r) = ([[1, 1], [2, 1], [9, 9]], [0.5, 1.0, -1.0]);
+/// assert_eq!(survivors(&c, &r, 1, false), vec![1, 2]);
+/// assert_eq!(survivors(&c, &r, 1, true), vec![1]);
+/// ```
+pub fn survivors(cands: &[[u32; 2]], resp: &[f32], r: u32, reject_edges: bool) -> Vec<usize> {
+    if !reject_edges {
+        return corner_nms(0, 0, cands, resp, r);
+    }
+    let kept: Vec<usize> = (0..cands.len()).filter(|&i| resp[i] > 0.0).collect();
+    let c: Vec<[u32; 2]> = kept.iter().map(|&i| cands[i]).collect();
+    let v: Vec<f32> = kept.iter().map(|&i| resp[i]).collect();
+    corner_nms(0, 0, &c, &v, r).into_iter().map(|k| kept[k]).collect()
+}
+
 /// An order-preserving map of a non-NaN f32 to i32 (-0.0 and 0.0 alike; every
 /// value above `i32::MIN`, which stands for "no candidate"), so that comparing
 /// responses is comparing integers.
@@ -261,6 +284,23 @@ mod tests {
             let resp: Vec<f32> = (0..cands.len()).map(|i| vals[((i as u64 * 13 + seed) % nv) as usize]).collect();
             let got = corner_nms(70, 40, &cands, &resp, r);
             proptest::prop_assert_eq!(got, naive(&cands, &resp, r));
+        }
+
+        #[test]
+        fn rejecting_edges_first_keeps_the_positive_survivors(pts in proptest::collection::vec((0u32..70, 0u32..40), 0..300),
+                                                              r in 0u32..8, seed in 0u64..1000) {
+            // reject_edges (drop responses <= 0 and NaN, then NMS) == NMS on every
+            // candidate, then keep the positive survivors; raster order or not
+            let mut cands: Vec<[u32; 2]> = pts.iter().map(|&(x, y)| [x, y]).collect();
+            if seed % 2 == 0 {
+                cands.sort_unstable_by_key(|c| (c[1], c[0]));
+                cands.dedup();
+            }
+            let vals = [0.0, -0.0, 1.0, 2.0, -1.0, 3.5e-7, -2.0e-9, f32::INFINITY, f32::NEG_INFINITY, f32::NAN];
+            let resp: Vec<f32> = (0..cands.len()).map(|i| vals[((i as u64 * 13 + seed) % 10) as usize]).collect();
+            let want: Vec<usize> = naive(&cands, &resp, r).into_iter().filter(|&i| resp[i] > 0.0).collect();
+            proptest::prop_assert_eq!(survivors(&cands, &resp, r, true), want);
+            proptest::prop_assert_eq!(survivors(&cands, &resp, r, false), naive(&cands, &resp, r));
         }
     }
 }

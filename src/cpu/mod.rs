@@ -418,7 +418,7 @@ impl CpuDetector {
             let cands = lfast::lfast(&em.edges, masks.as_ref().map(|m| &m[l]), &params);
             let resp = response::responses(&em.denoised, &cands);
             let mut kept: Vec<Corner> =
-                corner_nms::corner_nms(img.width, img.height, &cands, &resp, self.cfg.nms_radius)
+                corner_nms::survivors(&cands, &resp, self.cfg.nms_radius, self.cfg.reject_edges)
                     .into_iter()
                     .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i], sub: [0, 0] })
                     .collect();

@@ -75,6 +75,11 @@ pub struct Params {
     pub cells: u32,
     /// Corners move to the Harris maximum within this radius (`Config::snap`, 0 = off).
     pub snap_radius: u32,
+    /// 1: a candidate whose Harris response is not above 0 does not survive
+    /// corner NMS (`Config::reject_edges`).
+    pub reject_edges: u32,
+    /// Pads the struct to WGSL's 16-byte multiple.
+    pub _pad: [u32; 3],
 }
 
 /// The layout of one frame size under one config.
@@ -204,6 +209,7 @@ impl FrameLayout {
         p.capacity = capacity;
         p.orientation_bins = cfg.orientation_bins;
         p.snap_radius = cfg.snap();
+        p.reject_edges = cfg.reject_edges as u32;
         p.total_px = total.min(u32::MAX as u64) as u32;
         p.tile_row = TILE_ROW;
         p.max_w = width;

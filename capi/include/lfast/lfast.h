@@ -116,6 +116,9 @@ typedef struct {
   // Beyond the paper: each corner moves to the Harris maximum within this many
   // pixels (0 = stays on its edge pixel), 0..=16; at most `nms_radius / 2` is used.
   uint32_t snap_radius;
+  // Beyond the paper: a candidate whose Harris response is not above 0 (an
+  // edge, in Harris and Stephens' sense) is no corner.
+  bool reject_edges;
 } LfastConfig;
 
 // A borrowed image: `height` rows of `width` pixels, row `y` starting at

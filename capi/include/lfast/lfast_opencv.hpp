@@ -92,7 +92,8 @@ public:
                                  int nmsRadius = static_cast<int>(default_config().nms_radius),
                                  int snapRadius = static_cast<int>(default_config().snap_radius),
                                  LfastDescriptorKind descriptor = static_cast<LfastDescriptorKind>(default_config().descriptor),
-                                 Backend backend = Backend::Auto) {
+                                 Backend backend = Backend::Auto,
+                                 bool rejectEdges = default_config().reject_edges) {
         auto u = [](int v) { return v < 0 ? UINT32_MAX : static_cast<uint32_t>(v); };  // negative: rejected by validation
         Config c = default_config();
         c.n_features = u(nfeatures);
@@ -109,6 +110,7 @@ public:
         c.nms_radius = u(nmsRadius);
         c.snap_radius = u(snapRadius);
         c.descriptor = static_cast<int32_t>(descriptor);
+        c.reject_edges = rejectEdges;
         return create(c, backend);
     }
 
