@@ -6,7 +6,7 @@ use super::illumination::IllumSummary;
 use super::kitti::KittiSummary;
 use super::output::read_summary;
 use super::repeatability::RepeatSummary;
-use super::{Result, Suite, Variant, mode_name};
+use super::{Result, SPEC_NMS_RADIUS, Suite, Variant, mode_name};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -162,11 +162,17 @@ pub fn decide(out: &Path) -> Result<Option<Decision>> {
 }
 
 fn variant_label(v: Variant) -> String {
-    if v.snap > 0 {
-        format!("{} / support {} / snap {}", mode_name(v.mode), v.support, v.snap)
-    } else {
-        format!("{} / support {}", mode_name(v.mode), v.support)
+    let mut s = format!("{} / support {}", mode_name(v.mode), v.support);
+    if v.nms != SPEC_NMS_RADIUS {
+        s += &format!(" / nms {}", v.nms);
     }
+    if v.snap > 0 {
+        s += &format!(" / snap {}", v.snap);
+    }
+    if v.reject_edges {
+        s += " / no edges";
+    }
+    s
 }
 
 impl Decision {
@@ -196,7 +202,7 @@ impl Decision {
             .collect();
         table(
             &[
-                "L-FAST mode / support / snap",
+                "L-FAST mode / support / nms / snap / edges",
                 "KITTI points/frame",
                 "KITTI ms/frame",
                 "repeatability (all)",
@@ -215,9 +221,7 @@ impl Decision {
     pub fn verdict(&self) -> String {
         let score = |v: Variant| self.candidates.iter().find(|c| c.variant == v).map_or(f64::NAN, Candidate::score);
         let points = |v: Variant| self.candidates.iter().find(|c| c.variant == v).map_or(f64::NAN, |c| c.kitti_points);
-        let cfg = |v: Variant| {
-            format!("`mode = \"{}\"`, `support = {}`, `snap_radius = {}`", mode_name(v.mode), v.support, v.snap)
-        };
+        let cfg = |v: Variant| v.fields();
         let (cur, best, chosen) = (self.current, self.best, self.chosen);
         if chosen == cur && best == cur {
             format!("Keep the current defaults {}: they score best ({}).", cfg(cur), num(score(cur), 3))
@@ -265,8 +269,12 @@ impl Decision {
         let _ = writeln!(s, "## Choice of defaults (from suites 3-6)\n");
         let _ = writeln!(
             s,
-            "Candidates: L-FAST `mode` in {{paper, branch}} x `support` in {{3, 4}}, and the two \
-             support-3 ones with `snap_radius = 1` (the corner moved to the Harris peak, located to 1/16 px; docs/quality.md), everything else as `Config::default()`. Score = mean of repeatability and matching score at a budget of \
+            "Candidates: L-FAST `mode` in {{paper, branch}} x `support` in {{3, 4}}; the two \
+             support-3 ones with `snap_radius = 1` (the corner moved to the Harris peak, located to 1/16 px; \
+             docs/quality.md); paper support 3 snap 1 with `reject_edges = true` (no corner where the Harris \
+             response is not above 0: an edge); and the same with `nms_radius = 4`, `snap_radius = 2`. Each \
+             candidate sets `nms_radius` ({SPEC_NMS_RADIUS} unless named), `snap_radius` (0 unless named) and \
+             `reject_edges` (false unless named); every other field is `Config::default()`'s. Score = mean of repeatability and matching score at a budget of \
              {DECISION_BUDGET} keypoints (suite 4, every pair of every scene), keypoint survival (suite \
              5, every image, the four changes) and, when suite 6 ran for every candidate, the relative \
              trajectory accuracy: the smallest visual-odometry ATE RMSE (SE(3), the mean over suite 6's RANSAC \

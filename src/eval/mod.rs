@@ -168,7 +168,7 @@ impl Options {
     }
 }
 
-/// One L-FAST configuration under evaluation: the defaults that suites 3-6
+/// One L-FAST configuration under evaluation: the fields that suites 3-6
 /// decide between, everything else as `Config::default()`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Variant {
@@ -178,35 +178,80 @@ pub struct Variant {
     pub support: u32,
     /// `Config::snap_radius` (docs/quality.md), 0 = corners stay on their edge pixel.
     pub snap: u32,
+    /// SPEC 9 `nms_radius`.
+    pub nms: u32,
+    /// `Config::reject_edges` (docs/quality.md): no corner where the Harris response is not above 0.
+    pub reject_edges: bool,
+}
+
+/// SPEC 9's initial corner-NMS radius: variant keys and labels name any other.
+pub const SPEC_NMS_RADIUS: u32 = 3;
+
+const fn variant(mode: Mode, support: u32, snap: u32, nms: u32, reject_edges: bool) -> Variant {
+    Variant { mode, support, snap, nms, reject_edges }
 }
 
 impl Variant {
-    /// The candidates: {Paper, Branch} x support {3, 4} as the paper's corners,
-    /// and the two support-3 ones with their corners snapped within 1 px.
-    pub const ALL: [Variant; 6] = [
-        Variant { mode: Mode::Paper, support: 3, snap: 0 },
-        Variant { mode: Mode::Paper, support: 4, snap: 0 },
-        Variant { mode: Mode::Branch, support: 3, snap: 0 },
-        Variant { mode: Mode::Branch, support: 4, snap: 0 },
-        Variant { mode: Mode::Paper, support: 3, snap: 1 },
-        Variant { mode: Mode::Branch, support: 3, snap: 1 },
+    /// The candidates: {Paper, Branch} x support {3, 4} as the paper's corners;
+    /// the two support-3 ones with their corners snapped within 1 px; paper
+    /// support 3 snapped within 1 px without the candidates whose Harris
+    /// response says edge; and the same with NMS radius 4 and snap radius 2.
+    pub const ALL: [Variant; 8] = [
+        variant(Mode::Paper, 3, 0, SPEC_NMS_RADIUS, false),
+        variant(Mode::Paper, 4, 0, SPEC_NMS_RADIUS, false),
+        variant(Mode::Branch, 3, 0, SPEC_NMS_RADIUS, false),
+        variant(Mode::Branch, 4, 0, SPEC_NMS_RADIUS, false),
+        variant(Mode::Paper, 3, 1, SPEC_NMS_RADIUS, false),
+        variant(Mode::Branch, 3, 1, SPEC_NMS_RADIUS, false),
+        variant(Mode::Paper, 3, 1, SPEC_NMS_RADIUS, true),
+        variant(Mode::Paper, 3, 2, 4, true),
     ];
 
     /// The variant `Config::default()` is.
     pub fn current() -> Variant {
         let d = Config::default();
-        Variant { mode: d.mode, support: d.support, snap: d.snap_radius }
+        variant(d.mode, d.support, d.snap_radius, d.nms_radius, d.reject_edges)
     }
 
-    /// A stable key for files and JSON, e.g. `lfast-branch-s4`, `lfast-branch-s3-snap1`.
+    /// A stable key for files and JSON, e.g. `lfast-branch-s4`, `lfast-branch-s3-snap1`,
+    /// `lfast-paper-s3-nms4-snap2-noedges`.
     pub fn key(self) -> String {
+        let nms = if self.nms != SPEC_NMS_RADIUS { format!("-nms{}", self.nms) } else { String::new() };
         let snap = if self.snap > 0 { format!("-snap{}", self.snap) } else { String::new() };
-        format!("lfast-{}-s{}{snap}", mode_name(self.mode), self.support)
+        let edges = if self.reject_edges { "-noedges" } else { "" };
+        format!("lfast-{}-s{}{nms}{snap}{edges}", mode_name(self.mode), self.support)
     }
 
-    /// The configuration: the defaults with this mode, support and snap radius.
+    /// Display name: `L-FAST paper s3`, `L-FAST paper s3 nms4 snap2 no edges`.
+    pub fn label(self) -> String {
+        let nms = if self.nms != SPEC_NMS_RADIUS { format!(" nms{}", self.nms) } else { String::new() };
+        let snap = if self.snap > 0 { format!(" snap{}", self.snap) } else { String::new() };
+        let edges = if self.reject_edges { " no edges" } else { "" };
+        format!("L-FAST {} s{}{nms}{snap}{edges}", mode_name(self.mode), self.support)
+    }
+
+    /// The configuration fields as TOML-like text, for reports.
+    pub fn fields(self) -> String {
+        format!(
+            "`mode = \"{}\"`, `support = {}`, `nms_radius = {}`, `snap_radius = {}`, `reject_edges = {}`",
+            mode_name(self.mode),
+            self.support,
+            self.nms,
+            self.snap,
+            self.reject_edges
+        )
+    }
+
+    /// The configuration: the defaults with this variant's fields.
     pub fn config(self) -> Config {
-        Config { mode: self.mode, support: self.support, snap_radius: self.snap, ..Config::default() }
+        Config {
+            mode: self.mode,
+            support: self.support,
+            snap_radius: self.snap,
+            nms_radius: self.nms,
+            reject_edges: self.reject_edges,
+            ..Config::default()
+        }
     }
 
     /// True for the variant `Config::default()` uses now.
@@ -435,11 +480,7 @@ pub fn label(key: &str) -> String {
         "canny" => "Canny".into(),
         "improved-canny" => "improved Canny".into(),
         LFAST_L0 => "L-FAST default, level 0".into(),
-        k => match Variant::from_key(k) {
-            Some(v) if v.snap > 0 => format!("L-FAST {} s{} snap{}", mode_name(v.mode), v.support, v.snap),
-            Some(v) => format!("L-FAST {} s{}", mode_name(v.mode), v.support),
-            None => k.into(),
-        },
+        k => Variant::from_key(k).map_or_else(|| k.into(), Variant::label),
     }
 }
 
@@ -457,6 +498,8 @@ pub fn colour_of(key: &str) -> usize {
         "lfast-branch-s4" => 0,
         "lfast-paper-s3-snap1" => 8,
         "lfast-branch-s3-snap1" => 10,
+        "lfast-paper-s3-snap1-noedges" => 11,
+        "lfast-paper-s3-nms4-snap2-noedges" => 12,
         _ => 7,
     }
 }
