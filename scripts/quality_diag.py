@@ -11,7 +11,7 @@ Hamming matches within eps / min(common).
     python3 scripts/quality_diag.py [--data ../shared/data/homography] [--budget 500] [SECTION ...]
 
 Sections: levels, localisation, loss, candidates, swap, snap (default: all), and
-snaprank, variants, rerank, vo (VO ATE over five RANSAC seeds; needs ../kitti beside --data).
+snaprank, gate, variants, rerank, vo (VO ATE over the twenty RANSAC seeds of `lfast eval vo`; needs ../kitti beside --data).
 Needs numpy and opencv-python (cv2 FAST/ORB for the references, cv2.cornerHarris).
 """
 import argparse
@@ -424,6 +424,58 @@ def section_snaprank(a):
         print(f"| {lab} | {100 * np.mean(st[0]):.1f}% | {100 * np.mean(st[1]):.1f}% |")
 
 
+def harris_maxima(cands, g, gate, n):
+    """Harris maxima (7x7 squares, cv2.cornerHarris on each level) within `gate`
+    pixels of an L-FAST candidate of the same level (gate None: every maximum),
+    one pyramid, ranked by the response, top n; and the level-0 count uncapped."""
+    out = []
+    for o, im in enumerate(level_images(g)):
+        s = SCALE ** o
+        R = harris(im)
+        m = np.ones(R.shape, np.uint8)
+        if gate is not None:
+            m[:] = 0
+            c = cands[cands[:, 5] == o]
+            if len(c):
+                m[np.clip(np.floor(c[:, 1] / s).astype(int), 0, R.shape[0] - 1),
+                  np.clip(np.floor(c[:, 0] / s).astype(int), 0, R.shape[1] - 1)] = 1
+            if gate:
+                m = cv2.dilate(m, np.ones((2 * gate + 1, 2 * gate + 1), np.uint8))
+        # The maximum among the gated pixels (a gated pixel may win against an
+        # ungated stronger neighbour, as corner NMS ranks candidates only).
+        mx = cv2.dilate(np.where(m > 0, R, -np.inf).astype(np.float32), np.ones((7, 7), np.uint8))
+        ys, xs = np.nonzero((m > 0) & (R >= mx) & (R > 0))
+        out += [(R[y, x], (x + 0.5) * s, (y + 0.5) * s, o) for y, x in zip(ys, xs)]
+    out.sort(key=lambda t: -t[0])
+    arr = np.array([t[1:] for t in out]).reshape(-1, 3)
+    return arr[:n, :2], int((arr[:, 2] == 0).sum())
+
+
+def section_gate(a):
+    print("\n## gate: Harris maxima kept where an L-FAST candidate lies within d pixels, against the default (positions at the pixel centre, cv2 Harris and pyramid)")
+    print("| set, top N | " + " | ".join(s[0] for s in scenes(a.data)) + " | mean | level-0 points of image 1, uncapped |")
+    print("|---|" + "---:|" * (len(scenes(a.data)) + 2))
+    acc, l0 = {}, {}
+    for name, ref, k, img, h in all_pairs(a.data):
+        g1, g2 = gray(ref), gray(img)
+        cand = lfast([ref, img], {"mode": "paper", "support": 3, "nms_radius": 0, "snap_radius": 0})
+        base = lfast([ref, img], {"mode": "paper", "support": 3, "snap_radius": 1})
+        (k1, _), (k2, _) = top(*base[ref], a.budget), top(*base[img], a.budget)
+        sets = {"default, snapped to the cv2 Harris pixel": (snapped(k1, g1, 1), snapped(k2, g2, 1),
+                                                                 int((base[ref][0][:, 5] == 0).sum()))}
+        for d in (0, 1, 2, 3, 5, None):
+            (p1, n1), (p2, _) = harris_maxima(cand[ref][0], g1, d, a.budget), harris_maxima(cand[img][0], g2, d, a.budget)
+            sets["every Harris maximum" if d is None else f"Harris maxima, gate d = {d}"] = (p1, p2, n1)
+        for lab, (p1, p2, n1) in sets.items():
+            acc.setdefault(lab, {}).setdefault(name, []).append(score(p1, None, g1.shape, p2, None, g2.shape, h)[0])
+            if n1 is not None and k == 2:
+                l0.setdefault(lab, []).append(n1)
+    for lab, per in acc.items():
+        allv = [v for vs in per.values() for v in vs]
+        cnt = f"{np.mean(l0[lab]):.0f}" if lab in l0 else "–"
+        print(f"| {lab} | " + " | ".join(f"{100 * np.mean(v):.1f}" for v in per.values()) + f" | {100 * np.mean(allv):.1f} | {cnt} |")
+
+
 # Spelled out in full, so that a change of Config::default() does not change what a row means.
 VARIANTS = {
     "branch s4 (the default before 2026-11-26)": {"mode": "branch", "support": 4, "snap_radius": 0},
@@ -434,7 +486,11 @@ VARIANTS = {
     "paper s3, snap 1 (default)": {"mode": "paper", "support": 3, "snap_radius": 1},
     "paper s3, nms 4, snap 1": {"mode": "paper", "support": 3, "nms_radius": 4, "snap_radius": 1},
     "paper s3, nms 4, snap 2": {"mode": "paper", "support": 3, "nms_radius": 4, "snap_radius": 2},
+    "paper s3, snap 1, no edges": {"mode": "paper", "support": 3, "snap_radius": 1, "reject_edges": True},
+    "paper s3, nms 4, snap 2, no edges": {"mode": "paper", "support": 3, "nms_radius": 4, "snap_radius": 2, "reject_edges": True},
 }
+# Every variant names nms_radius, snap_radius and reject_edges (3, 0, false unless given).
+VARIANTS = {n: dict({"nms_radius": 3, "snap_radius": 0, "reject_edges": False}, **v) for n, v in VARIANTS.items()}
 
 
 def section_variants(a):
@@ -495,11 +551,11 @@ def section_rerank(a):
         sys.stdout.flush()
 
 
-SEEDS = [24301, 1, 2, 3, 4]
+SEEDS = [24301] + list(range(1, 20))  # eval::vo::SEEDS
 
 
 def section_vo(a):
-    """VO ATE over five RANSAC seeds and the level-0 count (target d) of each variant."""
+    """VO ATE over the RANSAC seeds and the level-0 count (target d) of each variant."""
     seq = os.path.join(a.data, "..", "kitti", "seq01_000000-000050")
     print(f"\n## vo: `lfast vo` ATE RMSE (SE(3)) over RANSAC seeds {SEEDS}, and level-0 keypoints per frame (n_levels 1, no cap)")
     print("| variant | ATE mean (m) | min | max | keypoints/frame | level-0 keypoints/frame |")
