@@ -117,15 +117,15 @@ impl Default for Config {
             support: 3,
             straight_tol: 1,
             border: 16,
-            nms_radius: 3,
+            nms_radius: 4,
             n_levels: 8,
             scale_factor: 1.2,
             n_features: 0,
             distribution: false,
             orientation_bins: 30,
             descriptor: DescriptorKind::Lfast,
-            snap_radius: 1,
-            reject_edges: false,
+            snap_radius: 2,
+            reject_edges: true,
         }
     }
 }
@@ -198,16 +198,17 @@ impl Config {
     }
 
     /// The paper's pipeline literally (SPEC 1-10 as written): `mode = "paper"`,
-    /// `support = 4` ("more than three" neighbours), no snap, every corner
-    /// whatever the sign of its response, the other fields at their defaults.
+    /// `support = 4` ("more than three" neighbours), SPEC 9's corner-NMS radius
+    /// 3, no snap, every corner whatever the sign of its response, the other
+    /// fields at their defaults.
     /// Its output does not move when the defaults do.
     ///
     /// ```
     /// let p = lfast::Config::paper();
-    /// assert_eq!((p.mode, p.support, p.snap_radius, p.reject_edges), (lfast::Mode::Paper, 4, 0, false));
+    /// assert_eq!((p.mode, p.support, p.nms_radius, p.snap_radius, p.reject_edges), (lfast::Mode::Paper, 4, 3, 0, false));
     /// ```
     pub fn paper() -> Self {
-        Self { mode: Mode::Paper, support: 4, snap_radius: 0, reject_edges: false, ..Self::default() }
+        Self { mode: Mode::Paper, support: 4, nms_radius: 3, snap_radius: 0, reject_edges: false, ..Self::default() }
     }
 
     /// The snap radius the pipeline uses: `min(snap_radius, nms_radius / 2)`.

@@ -11,11 +11,11 @@ fn defaults_are_the_spec_values() {
     // mode, support, snap_radius and reject_edges as the evaluation chose them (docs/evaluation.md)
     assert_eq!(c.mode, Mode::Paper);
     assert_eq!(c.support, 3);
-    assert_eq!(c.snap_radius, 1);
-    assert!(!c.reject_edges);
+    assert_eq!(c.snap_radius, 2);
+    assert!(c.reject_edges);
     assert_eq!(c.straight_tol, 1);
     assert_eq!(c.border, 16);
-    assert_eq!(c.nms_radius, 3);
+    assert_eq!(c.nms_radius, 4);
     assert_eq!(c.n_levels, 8);
     assert_eq!(c.scale_factor, 1.2);
     assert_eq!(c.n_features, 0);
