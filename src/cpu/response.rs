@@ -98,61 +98,102 @@ dispatch! {
 /// assert!(harris_3x3(&img, 7, 5).is_none()); // x + 5 = 12 is outside
 /// ```
 pub fn harris_3x3(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 3]; 3]> {
+    harris_square::<11, 3>(img, x, y, sums_3x3)
+}
+
+/// [`harris`] at the 7x7 square centred on (x, y), as [`harris_3x3`]:
+/// `out[j][i]` at (x - 3 + i, y - 3 + j); `None` unless the footprint
+/// x-7..=x+7 by y-7..=y+7 lies inside the image. The snap of radius 2 reads
+/// its 5x5 square and the ring around it (the sub-pixel fit's neighbours).
+///
+/// ```
+/// use lfast::{Plane, cpu::response::{harris, harris_7x7}};
+/// let img = Plane::from_vec(18, 17, (0..306u32).map(|i| (i * i % 251) as u8).collect()).unwrap();
+/// let sq = harris_7x7(&img, 8, 8).unwrap();
+/// assert_eq!(sq[0][6], harris(&img, 11, 5));
+/// assert!(harris_7x7(&img, 11, 8).is_none()); // x + 7 = 18 is outside
+/// ```
+pub fn harris_7x7(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 7]; 7]> {
+    harris_square::<15, 7>(img, x, y, sums_7x7)
+}
+
+/// The `S x S` responses centred on (x, y) from the `F x F` footprint
+/// (`F = S + 8`) through `sums`, `None` where the footprint leaves the image.
+#[inline(always)]
+fn harris_square<const F: usize, const S: usize>(
+    img: &Plane<u8>,
+    x: u32,
+    y: u32,
+    sums: fn(&[[u8; 18]; F]) -> [[[i32; S]; S]; 3],
+) -> Option<[[f32; S]; S]> {
     let (w, h) = (img.width as usize, img.height as usize);
-    let (x, y) = (x as usize, y as usize);
-    if x < 5 || y < 5 || x + 5 >= w || y + 5 >= h {
+    let (x, y, r) = (x as usize, y as usize, F / 2);
+    if x < r || y < r || x + r >= w || y + r >= h {
         return None;
     }
-    let mut rows = [[0u8; 18]; 11];
-    for (r, row) in rows.iter_mut().enumerate() {
-        row[..11].copy_from_slice(&img.data[(y - 5 + r) * w + x - 5..][..11]);
+    let mut rows = [[0u8; 18]; F];
+    for (k, row) in rows.iter_mut().enumerate() {
+        row[..F].copy_from_slice(&img.data[(y - r + k) * w + x - r..][..F]);
     }
-    let [a, b, c] = sums_3x3(&rows);
+    let [a, b, c] = sums(&rows);
     Some(std::array::from_fn(|j| std::array::from_fn(|i| harris_from_sums(a[j][i], b[j][i], c[j][i]))))
 }
 
+/// The structure-tensor sums `[a, b, c]` of the `S x S` 7x7 blocks centred on
+/// a square, `[j][i]` at (i, j) of the square, from the `F = S + 8` rows of its
+/// footprint (`F` pixels each, zero-padded to 18). As [`sums_9x9`]: per
+/// footprint row `h` and `s`, then Ix, Iy and their products at the
+/// `G = F - 2` gradient rows (16 lanes, `G` used); then 7-row column sums for
+/// each row of the square, and 7-column sums of those.
+#[inline(always)]
+fn sums_square<const F: usize, const G: usize, const S: usize>(rows: &[[u8; 18]; F]) -> [[[i32; S]; S]; 3] {
+    let mut h = [[0i32; 16]; F];
+    let mut s = [[0i32; 16]; F];
+    for (r, row) in rows.iter().enumerate() {
+        for i in 0..16 {
+            let (l, m, rt) = (row[i] as i32, row[i + 1] as i32, row[i + 2] as i32);
+            h[r][i] = rt - l;
+            s[r][i] = l + 2 * m + rt;
+        }
+    }
+    let mut p = [[[0i32; 16]; G]; 3];
+    for g in 0..G {
+        for i in 0..16 {
+            let ix = h[g][i] + 2 * h[g + 1][i] + h[g + 2][i];
+            let iy = s[g + 2][i] - s[g][i];
+            p[0][g][i] = ix * ix;
+            p[1][g][i] = iy * iy;
+            p[2][g][i] = ix * iy;
+        }
+    }
+    let mut out = [[[0i32; S]; S]; 3];
+    for (o, p) in out.iter_mut().zip(&p) {
+        for (j, o) in o.iter_mut().enumerate() {
+            let mut col = [0i32; 16];
+            for row in &p[j..j + 7] {
+                for i in 0..16 {
+                    col[i] += row[i];
+                }
+            }
+            for (i, o) in o.iter_mut().enumerate() {
+                *o = col[i..i + 7].iter().sum();
+            }
+        }
+    }
+    out
+}
+
 dispatch! {
-    /// The structure-tensor sums `[a, b, c]` of the nine 7x7 blocks centred on
-    /// the 3x3 square, `[j][i]` at (i, j) of the square, from the 11 rows of
-    /// its footprint (11 pixels, zero-padded to 18). As [`sums_9x9`]: per
-    /// footprint row `h` and `s`, then Ix, Iy and their products at the 9x9
-    /// gradient pixels (16 lanes, 9 used); then 7-row column sums for each row
-    /// of the square, and 7-column sums of those.
+    /// [`sums_square`] of the 3x3 square (11-row footprint).
     fn sums_3x3(rows: &[[u8; 18]; 11]) -> [[[i32; 3]; 3]; 3] {
-        let mut h = [[0i32; 16]; 11];
-        let mut s = [[0i32; 16]; 11];
-        for (r, row) in rows.iter().enumerate() {
-            for i in 0..16 {
-                let (l, m, rt) = (row[i] as i32, row[i + 1] as i32, row[i + 2] as i32);
-                h[r][i] = rt - l;
-                s[r][i] = l + 2 * m + rt;
-            }
-        }
-        let mut p = [[[0i32; 16]; 9]; 3];
-        for g in 0..9 {
-            for i in 0..16 {
-                let ix = h[g][i] + 2 * h[g + 1][i] + h[g + 2][i];
-                let iy = s[g + 2][i] - s[g][i];
-                p[0][g][i] = ix * ix;
-                p[1][g][i] = iy * iy;
-                p[2][g][i] = ix * iy;
-            }
-        }
-        let mut out = [[[0i32; 3]; 3]; 3];
-        for (o, p) in out.iter_mut().zip(&p) {
-            for (j, o) in o.iter_mut().enumerate() {
-                let mut col = [0i32; 16];
-                for row in &p[j..j + 7] {
-                    for i in 0..16 {
-                        col[i] += row[i];
-                    }
-                }
-                for (i, o) in o.iter_mut().enumerate() {
-                    *o = col[i..i + 7].iter().sum();
-                }
-            }
-        }
-        out
+        sums_square::<11, 9, 3>(rows)
+    }
+}
+
+dispatch! {
+    /// [`sums_square`] of the 7x7 square (15-row footprint).
+    fn sums_7x7(rows: &[[u8; 18]; 15]) -> [[[i32; 7]; 7]; 3] {
+        sums_square::<15, 13, 7>(rows)
     }
 }
 
@@ -262,6 +303,32 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(40))]
+        #[test]
+        fn square_7x7_matches_harris(w in 15u32..40, h in 15u32..30, seed in proptest::prelude::any::<u64>(),
+                                     levels in 1u64..256) {
+            let img = random_levels(w, h, seed, levels);
+            for y in 0..h {
+                for x in 0..w {
+                    let inside = x >= 7 && y >= 7 && x + 7 < w && y + 7 < h;
+                    match harris_7x7(&img, x, y) {
+                        None => proptest::prop_assert!(!inside, "({}, {})", x, y),
+                        Some(sq) => {
+                            proptest::prop_assert!(inside);
+                            for j in 0..7 {
+                                for i in 0..7 {
+                                    let want = harris(&img, x + i - 3, y + j - 3);
+                                    proptest::prop_assert_eq!(sq[j as usize][i as usize].to_bits(), want.to_bits());
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn square_at_extreme_contrast() {
         // a checkerboard of 0 and 255: the largest gradients, sums near i32's range
@@ -271,6 +338,19 @@ mod tests {
         let sq = harris_3x3(&img, 5, 5).unwrap();
         for j in 0..3 {
             for i in 0..3 {
+                assert_eq!(sq[j as usize][i as usize].to_bits(), harris(&img, 4 + i, 4 + j).to_bits());
+            }
+        }
+    }
+
+    #[test]
+    fn square_7x7_at_extreme_contrast() {
+        let img =
+            Plane::from_vec(15, 15, (0..225u32).map(|i| if (i % 15 + i / 15) % 2 == 0 { 255 } else { 0 }).collect())
+                .unwrap();
+        let sq = harris_7x7(&img, 7, 7).unwrap();
+        for j in 0..7 {
+            for i in 0..7 {
                 assert_eq!(sq[j as usize][i as usize].to_bits(), harris(&img, 4 + i, 4 + j).to_bits());
             }
         }

@@ -14,7 +14,7 @@
 //! (where the corner test runs) and, with a mask, where the level mask is on
 //! are candidates (the corner's own pixel always is).
 
-use super::response::{harris, harris_3x3};
+use super::response::{harris, harris_3x3, harris_7x7};
 use super::select::Corner;
 use crate::image::Plane;
 
@@ -39,11 +39,21 @@ pub fn snap(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32, border: 
     let (x0, y0) = (c.x.saturating_sub(s).max(border), c.y.saturating_sub(s).max(border));
     let (x1, y1) =
         ((c.x + s).min(d.width.saturating_sub(border + 1)), (c.y + s).min(d.height.saturating_sub(border + 1)));
-    // radius 1 (the default): the square's nine responses at once, where its footprint is inside
-    let square = if s == 1 { harris_3x3(d, c.x, c.y) } else { None };
-    let resp = |x: u32, y: u32| match square {
-        Some(sq) if x.abs_diff(c.x) <= 1 && y.abs_diff(c.y) <= 1 => sq[(y + 1 - c.y) as usize][(x + 1 - c.x) as usize],
-        _ => harris(d, x, y),
+    // radius 1: the square's nine responses at once; radius 2 (the default):
+    // the 5x5 square and the ring the sub-pixel fit may read, 7x7 at once;
+    // each where its footprint is inside the level
+    let square = match s {
+        1 => harris_3x3(d, c.x, c.y).map(Square::R1),
+        2 => harris_7x7(d, c.x, c.y).map(Square::R3),
+        _ => None,
+    };
+    let resp = |x: u32, y: u32| {
+        let (i, j) = (x as i64 - c.x as i64, y as i64 - c.y as i64);
+        match &square {
+            Some(Square::R1(q)) if i.abs() <= 1 && j.abs() <= 1 => q[(j + 1) as usize][(i + 1) as usize],
+            Some(Square::R3(q)) if i.abs() <= 3 && j.abs() <= 3 => q[(j + 3) as usize][(i + 3) as usize],
+            _ => harris(d, x, y),
+        }
     };
     let mut best = Corner { response: resp(c.x, c.y), sub: [0, 0], ..c };
     if s == 0 {
@@ -83,6 +93,12 @@ pub fn snap(d: &Plane<u8>, mask: Option<&Plane<u8>>, c: Corner, s: u32, border: 
     let qy = if y >= 1 && y + 1 < d.height { subpixel(at(x, y - 1), r0, at(x, y + 1)) } else { 0 };
     best.sub = [qx, qy];
     best
+}
+
+/// Harris responses computed at once around a corner: radius 1 and 3 squares.
+enum Square {
+    R1([[f32; 3]; 3]),
+    R3([[f32; 7]; 7]),
 }
 
 pub use crate::spec::{SUBPIXEL, SUBPIXEL_MAX};
