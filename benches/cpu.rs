@@ -57,15 +57,23 @@ fn bench_variants(c: &mut Criterion, img: &Plane<u8>) {
     use lfast::Mode;
     use lfast::baseline::orbslam::{OrbSlamDetector, OrbSlamParams};
     let d = Config::default();
+    // spelled out in full, so that a row keeps its meaning when the defaults move
+    let v = |mode, support, nms_radius, snap_radius, reject_edges| Config {
+        mode,
+        support,
+        nms_radius,
+        snap_radius,
+        reject_edges,
+        ..d.clone()
+    };
     let variants = [
         ("default", d.clone()),
-        ("branch_s4", Config { mode: Mode::Branch, support: 4, snap_radius: 0, ..d.clone() }),
-        ("paper_s3_snap1", Config { mode: Mode::Paper, support: 3, snap_radius: 1, ..d.clone() }),
-        ("branch_s3", Config { mode: Mode::Branch, support: 3, snap_radius: 0, ..d.clone() }),
-        ("branch_s3_snap1", Config { mode: Mode::Branch, support: 3, snap_radius: 1, ..d.clone() }),
-        ("paper_s3", Config { mode: Mode::Paper, support: 3, snap_radius: 0, ..d.clone() }),
-        ("paper_s3_nms4_snap2", Config { mode: Mode::Paper, support: 3, nms_radius: 4, snap_radius: 2, ..d.clone() }),
-        ("paper_s3_nms4_snap1", Config { mode: Mode::Paper, support: 3, nms_radius: 4, snap_radius: 1, ..d.clone() }),
+        ("branch_s4", v(Mode::Branch, 4, 3, 0, false)),
+        ("paper_s3", v(Mode::Paper, 3, 3, 0, false)),
+        ("paper_s3_snap1", v(Mode::Paper, 3, 3, 1, false)),
+        ("paper_s3_snap1_noedges", v(Mode::Paper, 3, 3, 1, true)),
+        ("paper_s3_nms4_snap2", v(Mode::Paper, 3, 4, 2, false)),
+        ("paper_s3_nms4_snap2_noedges", v(Mode::Paper, 3, 4, 2, true)),
     ];
     let mut g = c.benchmark_group(format!("variants_{}x{}", img.width, img.height));
     g.sample_size(20).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(3));
