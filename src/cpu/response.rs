@@ -117,6 +117,9 @@ pub fn harris_7x7(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 7]; 7]> {
     harris_square::<15, 7>(img, x, y, sums_7x7)
 }
 
+/// A kernel of [`sums_square`]: the footprint rows in, `[a, b, c]` of each block out.
+type SquareSums<const F: usize, const S: usize> = fn(&[[u8; 18]; F]) -> [[[i32; S]; S]; 3];
+
 /// The `S x S` responses centred on (x, y) from the `F x F` footprint
 /// (`F = S + 8`) through `sums`, `None` where the footprint leaves the image.
 #[inline(always)]
@@ -124,7 +127,7 @@ fn harris_square<const F: usize, const S: usize>(
     img: &Plane<u8>,
     x: u32,
     y: u32,
-    sums: fn(&[[u8; 18]; F]) -> [[[i32; S]; S]; 3],
+    sums: SquareSums<F, S>,
 ) -> Option<[[f32; S]; S]> {
     let (w, h) = (img.width as usize, img.height as usize);
     let (x, y, r) = (x as usize, y as usize, F / 2);
