@@ -490,7 +490,8 @@ VARIANTS = {
     "paper s3, nms 4, snap 2, no edges": {"mode": "paper", "support": 3, "nms_radius": 4, "snap_radius": 2, "reject_edges": True},
 }
 # Every variant names nms_radius, snap_radius and reject_edges (3, 0, false unless given).
-VARIANTS = {n: dict({"nms_radius": 3, "snap_radius": 0, "reject_edges": False}, **v) for n, v in VARIANTS.items()}
+SPELLED = {"nms_radius": 3, "snap_radius": 0, "reject_edges": False}
+VARIANTS = {n: dict(SPELLED, **v) for n, v in VARIANTS.items()}
 
 
 def section_variants(a):
@@ -589,9 +590,17 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--data", default=os.path.join(ROOT, "..", "shared", "data", "homography"))
     ap.add_argument("--budget", type=int, default=500)
-    ap.add_argument("--only", action="append", help="variants section: only these variants (repeatable)")
+    ap.add_argument("--only", action="append", help="variants and vo sections: only these variants (repeatable)")
+    ap.add_argument("--variant", action="append", default=[], metavar="NAME=JSON",
+                    help="variants and vo sections: one more variant, config fields as JSON (repeatable; "
+                         "nms_radius 3, snap_radius 0, reject_edges false unless given); "
+                         "only the variants given this way run, with those of --only")
     ap.add_argument("sections", nargs="*", default=["levels", "localisation", "loss", "candidates", "swap", "snap"])
     a = ap.parse_args()
+    for v in a.variant:
+        name, _, js = v.partition("=")
+        VARIANTS[name] = dict(SPELLED, **json.loads(js))
+        a.only = (a.only or []) + [name]
     if not os.path.isfile(LFAST):
         sys.exit(f"{LFAST} is missing: run `cargo build --release` first")
     print(f"data {a.data}, budget {a.budget}, scenes {[s[0] for s in scenes(a.data)]}")
