@@ -364,56 +364,43 @@ mod tests {
         }
     }
 
-    proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(60))]
-        #[test]
-        fn square_matches_harris(w in 11u32..40, h in 11u32..30, seed in proptest::prelude::any::<u64>(),
-                                 levels in 1u64..256) {
-            // every centre, the ones too near a side included (None there)
-            let img = random_levels(w, h, seed, levels);
-            for y in 0..h {
-                for x in 0..w {
-                    let inside = x >= 5 && y >= 5 && x + 5 < w && y + 5 < h;
-                    match harris_3x3(&img, x, y) {
-                        None => proptest::prop_assert!(!inside, "({}, {})", x, y),
-                        Some(sq) => {
-                            proptest::prop_assert!(inside);
-                            for j in 0..3 {
-                                for i in 0..3 {
-                                    let want = harris(&img, x + i - 1, y + j - 1);
-                                    proptest::prop_assert_eq!(sq[j as usize][i as usize].to_bits(), want.to_bits());
-                                }
+    use proptest::test_runner::TestCaseError;
+
+    /// [`harris_3x3`] or [`harris_7x7`].
+    type Square<const S: usize> = fn(&Plane<u8>, u32, u32) -> Option<[[f32; S]; S]>;
+
+    /// `square(img, x, y)` (S x S, footprint S + 8) against [`harris`] at every
+    /// centre, the ones too near a side included (`None` there).
+    fn check_square<const S: usize>(img: &Plane<u8>, square: Square<S>) -> Result<(), TestCaseError> {
+        let (r, f) = (S as u32 / 2, S as u32 / 2 + 4);
+        for y in 0..img.height {
+            for x in 0..img.width {
+                let inside = x >= f && y >= f && x + f < img.width && y + f < img.height;
+                match square(img, x, y) {
+                    None => proptest::prop_assert!(!inside, "({}, {})", x, y),
+                    Some(sq) => {
+                        proptest::prop_assert!(inside);
+                        for j in 0..S as u32 {
+                            for i in 0..S as u32 {
+                                let want = harris(img, x + i - r, y + j - r);
+                                proptest::prop_assert_eq!(sq[j as usize][i as usize].to_bits(), want.to_bits());
                             }
                         }
                     }
                 }
             }
         }
+        Ok(())
     }
 
     proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(40))]
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(50))]
         #[test]
-        fn square_7x7_matches_harris(w in 15u32..40, h in 15u32..30, seed in proptest::prelude::any::<u64>(),
-                                     levels in 1u64..256) {
+        fn squares_match_harris(w in 11u32..40, h in 11u32..30, seed in proptest::prelude::any::<u64>(),
+                                levels in 1u64..256) {
             let img = random_levels(w, h, seed, levels);
-            for y in 0..h {
-                for x in 0..w {
-                    let inside = x >= 7 && y >= 7 && x + 7 < w && y + 7 < h;
-                    match harris_7x7(&img, x, y) {
-                        None => proptest::prop_assert!(!inside, "({}, {})", x, y),
-                        Some(sq) => {
-                            proptest::prop_assert!(inside);
-                            for j in 0..7 {
-                                for i in 0..7 {
-                                    let want = harris(&img, x + i - 3, y + j - 3);
-                                    proptest::prop_assert_eq!(sq[j as usize][i as usize].to_bits(), want.to_bits());
-                                }
-                            }
-                        }
-                    }
-                }
-            }
+            check_square(&img, harris_3x3)?;
+            check_square(&img, harris_7x7)?;
         }
     }
 
