@@ -591,12 +591,16 @@ def main():
     ap.add_argument("--data", default=os.path.join(ROOT, "..", "shared", "data", "homography"))
     ap.add_argument("--budget", type=int, default=500)
     ap.add_argument("--only", action="append", help="variants and vo sections: only these variants (repeatable)")
+    ap.add_argument("--seeds", metavar="A-B", help="vo section: RANSAC seeds A..=B instead of the eval's twenty")
     ap.add_argument("--variant", action="append", default=[], metavar="NAME=JSON",
                     help="variants and vo sections: one more variant, config fields as JSON (repeatable; "
                          "nms_radius 3, snap_radius 0, reject_edges false unless given); "
                          "only the variants given this way run, with those of --only")
     ap.add_argument("sections", nargs="*", default=["levels", "localisation", "loss", "candidates", "swap", "snap"])
     a = ap.parse_args()
+    if a.seeds:
+        lo, _, hi = a.seeds.partition("-")
+        SEEDS[:] = range(int(lo), int(hi or lo) + 1)
     for v in a.variant:
         name, _, js = v.partition("=")
         VARIANTS[name] = dict(SPELLED, **json.loads(js))
