@@ -819,7 +819,9 @@ fn out_of_memory_on_a_workspace_is_a_typed_error_and_auto_runs_the_frame_on_the_
         assert!(o.status.success() && text.contains("oom child: done"), "child: {:?}\n{text}", o.status);
         return;
     }
-    let cfg = Config { n_levels: 1, ..Config::default() };
+    // Config::paper(): its buffers do not move with the defaults (the keypoint
+    // slots follow nms_radius; under NMS radius 4 a 5000x5000 workspace fits the cap)
+    let cfg = Config { n_levels: 1, ..Config::paper() };
     let gpu = GpuDetector::new(ctx.clone(), cfg.clone()).unwrap();
     let auto = Detector::from_context_with_fallback(ctx, cfg.clone()).unwrap();
     let c = cpu(&cfg);
