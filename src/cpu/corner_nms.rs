@@ -115,8 +115,12 @@ dispatch! {
             // the ring row of y - r (rows above the top hold no key)
             let top = (slots.of(py) + side - r as usize) % side;
             let sq = Square { ring: &ring, width, top, x: px as usize };
-            // radius 3 (the default) with constants, so that the compares unroll
-            let beaten = if side == 7 { sq.beaten(kp, 7, 1) } else { sq.beaten(kp, side, chunks) };
+            // radius 4 (the default) and 3 (SPEC 9's) with constants, so that the compares unroll
+            let beaten = match side {
+                9 => sq.beaten(kp, 9, 2),
+                7 => sq.beaten(kp, 7, 1),
+                _ => sq.beaten(kp, side, chunks),
+            };
             if !beaten {
                 keep.push(p);
             }
