@@ -98,7 +98,7 @@ dispatch! {
 /// assert!(harris_3x3(&img, 7, 5).is_none()); // x + 5 = 12 is outside
 /// ```
 pub fn harris_3x3(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 3]; 3]> {
-    harris_square::<11, 3>(img, x, y, sums_3x3)
+    harris_rect::<11, 3, 3>(img, x.checked_sub(1)?, y.checked_sub(1)?, sums_3x3)
 }
 
 /// [`harris`] at the 7x7 square centred on (x, y), as [`harris_3x3`]:
@@ -114,47 +114,43 @@ pub fn harris_3x3(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 3]; 3]> {
 /// assert!(harris_7x7(&img, 11, 8).is_none()); // x + 7 = 18 is outside
 /// ```
 pub fn harris_7x7(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 7]; 7]> {
-    harris_square::<15, 7>(img, x, y, sums_7x7)
+    harris_rect::<15, 7, 7>(img, x.checked_sub(3)?, y.checked_sub(3)?, sums_7x7)
 }
 
-/// A kernel of [`sums_square`]: the footprint rows in, `[a, b, c]` of each block out.
-type SquareSums<const F: usize, const S: usize> = fn(&[[u8; 18]; F]) -> [[[i32; S]; S]; 3];
+/// A kernel of [`sums_rect`]: the footprint rows in, `[a, b, c]` of each block out.
+type RectSums<const F: usize, const SY: usize, const SX: usize> = fn(&[[u8; 18]; F]) -> [[[i32; SX]; SY]; 3];
 
-/// The `S x S` responses centred on (x, y) from the `F x F` footprint
-/// (`F = S + 8`) through `sums`, `None` where the footprint leaves the image.
+/// [`harris`] at the `SY x SX` pixels whose top-left is (x0, y0), `out[j][i]`
+/// at (x0 + i, y0 + j), through `sums` from the footprint x0-4..x0+SX+4 by
+/// y0-4..y0+SY+4 (`F = SY + 8` rows of `SX + 8` pixels); `None` where the
+/// footprint leaves the image.
 #[inline(always)]
-fn harris_square<const F: usize, const S: usize>(
+fn harris_rect<const F: usize, const SY: usize, const SX: usize>(
     img: &Plane<u8>,
-    x: u32,
-    y: u32,
-    sums: SquareSums<F, S>,
-) -> Option<[[f32; S]; S]> {
+    x0: u32,
+    y0: u32,
+    sums: RectSums<F, SY, SX>,
+) -> Option<[[f32; SX]; SY]> {
     let (w, h) = (img.width as usize, img.height as usize);
-    let (x, y, r) = (x as usize, y as usize, F / 2);
-    if x < r || y < r || x + r >= w || y + r >= h {
+    let (x0, y0) = (x0 as usize, y0 as usize);
+    if x0 < 4 || y0 < 4 || x0 + SX + 4 > w || y0 + SY + 4 > h {
         return None;
     }
     let mut rows = [[0u8; 18]; F];
     for (k, row) in rows.iter_mut().enumerate() {
-        row[..F].copy_from_slice(&img.data[(y - r + k) * w + x - r..][..F]);
+        row[..SX + 8].copy_from_slice(&img.data[(y0 - 4 + k) * w + x0 - 4..][..SX + 8]);
     }
     let [a, b, c] = sums(&rows);
     Some(std::array::from_fn(|j| std::array::from_fn(|i| harris_from_sums(a[j][i], b[j][i], c[j][i]))))
 }
 
-/// The structure-tensor sums `[a, b, c]` of the `S x S` 7x7 blocks centred on
-/// a square, `[j][i]` at (i, j) of the square, from the `F = S + 8` rows of its
-/// footprint (`F` pixels each, zero-padded to 18). As [`sums_9x9`]: per
-/// footprint row `h` and `s`, then Ix, Iy and their products at the
-/// `G = F - 2` gradient rows (16 lanes, `G` used); then 7-row column sums for
-/// each row of the square, and 7-column sums of those.
-#[inline(always)]
-fn sums_square<const F: usize, const G: usize, const S: usize>(rows: &[[u8; 18]; F]) -> [[[i32; S]; S]; 3] {
-    sums_rect::<F, G, S, S>(rows)
-}
-
-/// [`sums_square`] of a rectangle `SX` wide (at most 10) and `SY` high
-/// (`F = SY + 8` rows, `G = F - 2`).
+/// The structure-tensor sums `[a, b, c]` of the 7x7 blocks centred on the
+/// pixels of an `SY x SX` rectangle (`SX` at most 10), `[j][i]` at (i, j) of
+/// it, from the `F = SY + 8` rows of its footprint (`SX + 8` pixels each,
+/// zero-padded to 18). As [`sums_9x9`]: per footprint row `h` and `s`, then
+/// Ix, Iy and their products at the `G = F - 2` gradient rows (16 lanes);
+/// then 7-row column sums for each row of the rectangle, and 7-column sums of
+/// those.
 #[inline(always)]
 fn sums_rect<const F: usize, const G: usize, const SY: usize, const SX: usize>(
     rows: &[[u8; 18]; F],
@@ -196,9 +192,9 @@ fn sums_rect<const F: usize, const G: usize, const SY: usize, const SX: usize>(
 }
 
 dispatch! {
-    /// [`sums_square`] of the 3x3 square (11-row footprint).
+    /// [`sums_rect`] of the 3x3 square (11-row footprint).
     fn sums_3x3(rows: &[[u8; 18]; 11]) -> [[[i32; 3]; 3]; 3] {
-        sums_square::<11, 9, 3>(rows)
+        sums_rect::<11, 9, 3, 3>(rows)
     }
 }
 
@@ -223,23 +219,13 @@ pub const STRIP: u32 = 8;
 /// assert!(harris_strip(&img, 9, 5).is_none()); // x + 11 = 20 is outside
 /// ```
 pub fn harris_strip(img: &Plane<u8>, x: u32, y: u32) -> Option<[f32; 8]> {
-    let (w, h) = (img.width as usize, img.height as usize);
-    let (x, y) = (x as usize, y as usize);
-    if x < 4 || y < 4 || x + 11 >= w || y + 4 >= h {
-        return None;
-    }
-    let mut rows = [[0u8; 18]; 9];
-    for (k, row) in rows.iter_mut().enumerate() {
-        row[..16].copy_from_slice(&img.data[(y - 4 + k) * w + x - 4..][..16]);
-    }
-    let [a, b, c] = sums_strip(&rows);
-    Some(std::array::from_fn(|i| harris_from_sums(a[0][i], b[0][i], c[0][i])))
+    harris_rect::<9, 1, 8>(img, x, y, sums_strip).map(|[row]| row)
 }
 
 dispatch! {
-    /// [`sums_square`] of the 7x7 square (15-row footprint).
+    /// [`sums_rect`] of the 7x7 square (15-row footprint).
     fn sums_7x7(rows: &[[u8; 18]; 15]) -> [[[i32; 7]; 7]; 3] {
-        sums_square::<15, 13, 7>(rows)
+        sums_rect::<15, 13, 7, 7>(rows)
     }
 }
 
