@@ -111,7 +111,10 @@ impl AngleBins {
         if (m10, m01) == (0, 0) {
             return 0; // no direction: angle 0, as atan2(0, 0)
         }
-        let n = self.bounds.iter().filter(|&&b| at_or_past(b, (m10, m01))).count();
+        // The boundaries ascend strictly in angle (tested for every bin count
+        // allowed), so those the direction is at or past are a prefix: a binary
+        // search counts them, as shaders/orientation.wgsl `bin_of` does.
+        let n = self.bounds.partition_point(|&b| at_or_past(b, (m10, m01)));
         (n % self.bounds.len()) as u32
     }
 
@@ -134,6 +137,27 @@ mod tests {
             let b = AngleBins::new(bins);
             for w in b.bounds().windows(2) {
                 assert!(at_or_past(w[0], w[1]) && !at_or_past(w[1], w[0]), "bins {bins}: {:?}", w);
+            }
+        }
+    }
+
+    /// The binary search of `bin_of` == the count of every boundary the
+    /// direction is at or past, for every bin count and directions on and
+    /// beside every boundary.
+    #[test]
+    fn bin_of_equals_the_linear_count() {
+        for bins in 1..=360u32 {
+            let b = AngleBins::new(bins);
+            let mut dirs = vec![(1, 0), (0, 1), (-1, 0), (0, -1), (100, -1), (-7, -1 << 20), ((1 << 21) - 1, 3)];
+            for &(x, y) in b.bounds() {
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (-1, 0), (0, -1)] {
+                    dirs.push((x + dx, y + dy));
+                    dirs.push((x * 4096 + dx, y * 4096 + dy));
+                }
+            }
+            for v in dirs {
+                let linear = b.bounds().iter().filter(|&&bd| at_or_past(bd, v)).count() % b.len();
+                assert_eq!(b.bin_of(v.0, v.1) as usize, linear, "bins {bins}, direction {v:?}");
             }
         }
     }
