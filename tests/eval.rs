@@ -472,8 +472,8 @@ fn cli_repeatability_on_a_shifted_scene() {
             .find(|r| r[col("pair")] == pair && r[col("detector")] == det && r[col("budget")] == budget)
             .unwrap_or_else(|| panic!("no row {pair} {det} {budget}"))
     };
-    // 11 detectors (8 L-FAST variants, FAST-9, ORB, ORB-SLAM) x 3 budgets x 2 pairs
-    assert_eq!(rows.len(), 1 + 11 * 3 * 2);
+    // 12 detectors (9 L-FAST variants, FAST-9, ORB, ORB-SLAM) x 3 budgets x 2 pairs
+    assert_eq!(rows.len(), 1 + 12 * 3 * 2);
     for det in [
         "fast9",
         "orb",
@@ -542,9 +542,9 @@ fn cli_all_quick_on_a_tiny_root() {
     // the edge maps side by side: noisy | Canny | improved, 4-px gaps
     let side = lfast::image::load_gray(out.join("images/continuity_camera.png")).unwrap();
     assert_eq!((side.width, side.height), (3 * 120 + 8, 96));
-    // kitti: 2 frames x 12 detectors (the 8 variants, the default on level 0, 3 baselines)
-    assert_eq!(csv_rows(&out.join("kitti.csv")).len(), 1 + 2 * 12);
-    // vo: the eight L-FAST variants, FAST-9, ORB, ORB-SLAM
+    // kitti: 2 frames x 13 detectors (the 9 variants, the default on level 0, 3 baselines)
+    assert_eq!(csv_rows(&out.join("kitti.csv")).len(), 1 + 2 * 13);
+    // vo: the nine L-FAST variants, FAST-9, ORB, ORB-SLAM
     let vo = csv_rows(&out.join("vo.csv"));
     assert_eq!(
         vo.iter().skip(1).map(|r| r[0].as_str()).collect::<Vec<_>>(),
@@ -557,13 +557,14 @@ fn cli_all_quick_on_a_tiny_root() {
             "lfast-branch-s3-snap1",
             "lfast-paper-s3-snap1-noedges",
             "lfast-paper-s3-nms4-snap2-noedges",
+            "lfast-paper-s3-nms4-snap2-noedges-bins180",
             "fast9",
             "orb",
             "orbslam"
         ]
     );
-    // illumination: (2 standard + 2 KITTI) x 4 changes x (2 edge + 10 keypoint methods)
-    assert_eq!(csv_rows(&out.join("illumination.csv")).len(), 1 + 4 * 4 * 12);
+    // illumination: (2 standard + 2 KITTI) x 4 changes x (2 edge + 11 keypoint methods)
+    assert_eq!(csv_rows(&out.join("illumination.csv")).len(), 1 + 4 * 4 * 13);
     let page = std::fs::read_to_string(&doc).unwrap();
     assert!(
         page.contains("# Evaluation") && page.contains("## Choice of defaults") && page.contains("PSNR = 10 log10")
@@ -611,10 +612,10 @@ fn cli_quick_suites_on_the_shared_data() {
     let k = csv_rows(&out.join("kitti.csv"));
     let fast0 = k.iter().find(|r| r[0] == "000000" && r[1] == "fast9").unwrap();
     assert_eq!(fast0[2], "3716");
-    assert_eq!(k.len(), 1 + 3 * 12, "3 frames x 12 detectors");
-    // one pair of boat, 11 detectors x 3 budgets; every score a fraction
+    assert_eq!(k.len(), 1 + 3 * 13, "3 frames x 13 detectors");
+    // one pair of boat, 12 detectors x 3 budgets; every score a fraction
     let r = csv_rows(&out.join("repeatability.csv"));
-    assert_eq!(r.len(), 1 + 33);
+    assert_eq!(r.len(), 1 + 36);
     for row in &r[1..] {
         let rep: f64 = row[9].parse().unwrap();
         assert!((0.0..=1.0).contains(&rep) && row[1] == "1-2", "{row:?}");

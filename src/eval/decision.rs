@@ -6,7 +6,7 @@ use super::illumination::IllumSummary;
 use super::kitti::KittiSummary;
 use super::output::read_summary;
 use super::repeatability::RepeatSummary;
-use super::{Result, SPEC_NMS_RADIUS, Suite, Variant, mode_name};
+use super::{Result, SPEC_BINS, SPEC_NMS_RADIUS, Suite, Variant, mode_name};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -172,6 +172,9 @@ fn variant_label(v: Variant) -> String {
     if v.reject_edges {
         s += " / no edges";
     }
+    if v.bins != SPEC_BINS {
+        s += &format!(" / {} bins", v.bins);
+    }
     s
 }
 
@@ -202,7 +205,7 @@ impl Decision {
             .collect();
         table(
             &[
-                "L-FAST mode / support / nms / snap / edges",
+                "L-FAST mode / support / nms / snap / edges / bins",
                 "KITTI points/frame",
                 "KITTI ms/frame",
                 "repeatability (all)",
@@ -272,9 +275,10 @@ impl Decision {
             "Candidates: L-FAST `mode` in {{paper, branch}} x `support` in {{3, 4}}; the two \
              support-3 ones with `snap_radius = 1` (the corner moved to the Harris peak, located to 1/16 px; \
              docs/quality.md); paper support 3 snap 1 with `reject_edges = true` (no corner where the Harris \
-             response is not above 0: an edge); and the same with `nms_radius = 4`, `snap_radius = 2`. Each \
-             candidate sets `nms_radius` ({SPEC_NMS_RADIUS} unless named), `snap_radius` (0 unless named) and \
-             `reject_edges` (false unless named); every other field is `Config::default()`'s. Score = mean of repeatability and matching score at a budget of \
+             response is not above 0: an edge); the same with `nms_radius = 4`, `snap_radius = 2`; and that one \
+             with `orientation_bins = 180` (the descriptor's pattern rotated in 2° steps instead of 12°). Each \
+             candidate sets `nms_radius` ({SPEC_NMS_RADIUS} unless named), `snap_radius` (0 unless named), \
+             `reject_edges` (false unless named) and `orientation_bins` ({SPEC_BINS} unless named); every other field is `Config::default()`'s. Score = mean of repeatability and matching score at a budget of \
              {DECISION_BUDGET} keypoints (suite 4, every pair of every scene), keypoint survival (suite \
              5, every image, the four changes) and, when suite 6 ran for every candidate, the relative \
              trajectory accuracy: the smallest visual-odometry ATE RMSE (SE(3), the mean over suite 6's RANSAC \

@@ -182,21 +182,32 @@ pub struct Variant {
     pub nms: u32,
     /// `Config::reject_edges` (docs/quality.md): no corner where the Harris response is not above 0.
     pub reject_edges: bool,
+    /// `Config::orientation_bins`: the descriptor's pattern is rotated to one of this many angles.
+    pub bins: u32,
 }
 
 /// SPEC 9's initial corner-NMS radius: variant keys and labels name any other.
 pub const SPEC_NMS_RADIUS: u32 = 3;
 
+/// SPEC 11's default `orientation_bins` (the ORB paper's 12° steps): variant
+/// keys and labels name any other.
+pub const SPEC_BINS: u32 = 30;
+
 const fn variant(mode: Mode, support: u32, snap: u32, nms: u32, reject_edges: bool) -> Variant {
-    Variant { mode, support, snap, nms, reject_edges }
+    Variant { mode, support, snap, nms, reject_edges, bins: SPEC_BINS }
+}
+
+const fn with_bins(v: Variant, bins: u32) -> Variant {
+    Variant { bins, ..v }
 }
 
 impl Variant {
     /// The candidates: {Paper, Branch} x support {3, 4} as the paper's corners;
     /// the two support-3 ones with their corners snapped within 1 px; paper
     /// support 3 snapped within 1 px without the candidates whose Harris
-    /// response says edge; and the same with NMS radius 4 and snap radius 2.
-    pub const ALL: [Variant; 8] = [
+    /// response says edge; the same with NMS radius 4 and snap radius 2; and
+    /// that one with the descriptor's pattern rotated in 2° steps instead of 12°.
+    pub const ALL: [Variant; 9] = [
         variant(Mode::Paper, 3, 0, SPEC_NMS_RADIUS, false),
         variant(Mode::Paper, 4, 0, SPEC_NMS_RADIUS, false),
         variant(Mode::Branch, 3, 0, SPEC_NMS_RADIUS, false),
@@ -205,40 +216,56 @@ impl Variant {
         variant(Mode::Branch, 3, 1, SPEC_NMS_RADIUS, false),
         variant(Mode::Paper, 3, 1, SPEC_NMS_RADIUS, true),
         variant(Mode::Paper, 3, 2, 4, true),
+        with_bins(variant(Mode::Paper, 3, 2, 4, true), 180),
     ];
 
     /// The variant `Config::default()` is.
     pub fn current() -> Variant {
         let d = Config::default();
-        variant(d.mode, d.support, d.snap_radius, d.nms_radius, d.reject_edges)
+        with_bins(variant(d.mode, d.support, d.snap_radius, d.nms_radius, d.reject_edges), d.orientation_bins)
     }
 
     /// A stable key for files and JSON, e.g. `lfast-branch-s4`, `lfast-branch-s3-snap1`,
-    /// `lfast-paper-s3-nms4-snap2-noedges`.
+    /// `lfast-paper-s3-nms4-snap2-noedges`, `lfast-paper-s3-nms4-snap2-noedges-bins180`.
     pub fn key(self) -> String {
-        let nms = if self.nms != SPEC_NMS_RADIUS { format!("-nms{}", self.nms) } else { String::new() };
-        let snap = if self.snap > 0 { format!("-snap{}", self.snap) } else { String::new() };
-        let edges = if self.reject_edges { "-noedges" } else { "" };
-        format!("lfast-{}-s{}{nms}{snap}{edges}", mode_name(self.mode), self.support)
+        format!("lfast-{}", self.words().join("-"))
     }
 
     /// Display name: `L-FAST paper s3`, `L-FAST paper s3 nms4 snap2 no edges`.
     pub fn label(self) -> String {
-        let nms = if self.nms != SPEC_NMS_RADIUS { format!(" nms{}", self.nms) } else { String::new() };
-        let snap = if self.snap > 0 { format!(" snap{}", self.snap) } else { String::new() };
-        let edges = if self.reject_edges { " no edges" } else { "" };
-        format!("L-FAST {} s{}{nms}{snap}{edges}", mode_name(self.mode), self.support)
+        format!("L-FAST {}", self.words().join(" ").replace("noedges", "no edges"))
+    }
+
+    /// What sets this variant apart, one word each: mode, support, then any
+    /// NMS radius, snap, edge rejection or bin count other than SPEC's.
+    fn words(self) -> Vec<String> {
+        let mut w = vec![mode_name(self.mode).to_string(), format!("s{}", self.support)];
+        if self.nms != SPEC_NMS_RADIUS {
+            w.push(format!("nms{}", self.nms));
+        }
+        if self.snap > 0 {
+            w.push(format!("snap{}", self.snap));
+        }
+        if self.reject_edges {
+            w.push("noedges".into());
+        }
+        if self.bins != SPEC_BINS {
+            w.push(format!("bins{}", self.bins));
+        }
+        w
     }
 
     /// The configuration fields as TOML-like text, for reports.
     pub fn fields(self) -> String {
         format!(
-            "`mode = \"{}\"`, `support = {}`, `nms_radius = {}`, `snap_radius = {}`, `reject_edges = {}`",
+            "`mode = \"{}\"`, `support = {}`, `nms_radius = {}`, `snap_radius = {}`, `reject_edges = {}`, \
+             `orientation_bins = {}`",
             mode_name(self.mode),
             self.support,
             self.nms,
             self.snap,
-            self.reject_edges
+            self.reject_edges,
+            self.bins
         )
     }
 
@@ -250,6 +277,7 @@ impl Variant {
             snap_radius: self.snap,
             nms_radius: self.nms,
             reject_edges: self.reject_edges,
+            orientation_bins: self.bins,
             ..Config::default()
         }
     }
