@@ -1,13 +1,17 @@
 //! Suite 4 (beyond the paper): repeatability and matching score on
 //! Oxford-format scenes (Mikolajczyk et al. 2005): image 1 against images
 //! 2..N through the given homographies, for L-FAST, FAST-9 and ORB, with
-//! every keypoint and at equal budgets (top N by response).
+//! every keypoint and at equal budgets: each detector with its own cap of N
+//! (L-FAST `n_features = N`, SPEC 9's per-level quotas; ORB and ORB-SLAM
+//! `nfeatures = N`), FAST-9, which has no cap, by its top N scores.
 
 use super::format::{Csv, csv_f, pct, table};
 use super::metrics::{PairScore, read_homography, score_pair};
 use super::output::write_section;
 use super::plot::{Panel, Series, figure};
 use super::{Detectors, EvalError, Options, Result, Suite, colour_of, image_files, label, mean, stem};
+use crate::config::Config;
+use crate::cpu::CpuDetector;
 use crate::image::Plane;
 use crate::keypoint::{Descriptor, KeyPoint};
 use nalgebra::Matrix3;
@@ -45,7 +49,8 @@ pub struct RepeatSummary {
 
 /// Tolerance of a correspondence, pixels (in image n).
 pub const EPS: f64 = 2.5;
-/// The equal budgets (top N by response; ORB with `nfeatures = N`).
+/// The equal budgets: each detector capped at N by its own rule (FAST-9, single-scale and
+/// uncapped, by its top N scores).
 pub const BUDGETS: [u32; 2] = [500, 1000];
 
 /// One Oxford-format scene: `img1..imgN` and `H1to2p..H1toNp`.
@@ -129,20 +134,33 @@ fn features(kps: &[KeyPoint], desc: &[Descriptor], n: usize) -> Features {
 /// (detector key, budget) → features of one image.
 type ImageFeatures = BTreeMap<(String, Option<u32>), Features>;
 
-fn detect_all(img: &Plane<u8>, det: &Detectors) -> Result<ImageFeatures> {
+/// The L-FAST variants capped at each of [`BUDGETS`]: `capped[i][j]` is
+/// `Detectors::lfast[i]` with `n_features = BUDGETS[j]`.
+fn capped_lfast(det: &Detectors) -> Result<Vec<Vec<CpuDetector>>> {
+    det.lfast
+        .iter()
+        .map(|(v, _)| BUDGETS.iter().map(|&b| Ok(CpuDetector::new(Config { n_features: b, ..v.config() })?)).collect())
+        .collect()
+}
+
+fn detect_all(img: &Plane<u8>, det: &Detectors, capped: &[Vec<CpuDetector>]) -> Result<ImageFeatures> {
     let mut out = ImageFeatures::new();
-    let mut add = |key: &str, kps: &[KeyPoint], desc: &[Descriptor]| {
-        out.insert((key.to_string(), None), features(kps, desc, usize::MAX));
-        for b in BUDGETS {
-            out.insert((key.to_string(), Some(b)), features(kps, desc, b as usize));
+    // L-FAST: every keypoint, and its own cap of N (SPEC 9's per-level quotas),
+    // as a user with a budget runs it and as ORB and ORB-SLAM run below
+    for ((v, d), caps) in det.lfast.iter().zip(capped) {
+        let (k, desc) = d.detect_and_compute(img.view(), None)?;
+        out.insert((v.key(), None), features(&k, &desc, usize::MAX));
+        for (&b, d) in BUDGETS.iter().zip(caps) {
+            let (k, desc) = d.detect_and_compute(img.view(), None)?;
+            out.insert((v.key(), Some(b)), features(&k, &desc, usize::MAX));
         }
-    };
-    for (v, d) in &det.lfast {
-        let (k, desc) = d.detect_and_compute(img.view(), None)?; // already strongest first
-        add(&v.key(), &k, &desc);
     }
+    // FAST-9 has no cap: its top N scores (strongest first)
     let (k, desc) = det.fast9_described(img)?;
-    add("fast9", &k, &desc);
+    out.insert(("fast9".into(), None), features(&k, &desc, usize::MAX));
+    for b in BUDGETS {
+        out.insert(("fast9".into(), Some(b)), features(&k, &desc, b as usize));
+    }
     // ORB always has a budget: cv2.ORB_create()'s 500 for "all", N for budget N
     let (k, desc) = det.orb.detect_and_compute(img.view())?;
     out.insert(("orb".into(), None), features(&k, &desc, usize::MAX));
@@ -178,15 +196,16 @@ pub fn run(opts: &Options) -> Result<()> {
         scenes.iter_mut().for_each(|s| s.pairs.truncate(1));
     }
     let det = Detectors::new()?;
+    let capped = capped_lfast(&det)?;
     let mut rows = Vec::new();
     let mut keys: Vec<String> = det.lfast.iter().map(|(v, _)| v.key()).collect();
     keys.extend(["fast9".to_string(), "orb".to_string(), "orbslam".to_string()]);
     for sc in &scenes {
         let img1 = crate::image::load_gray(&sc.reference)?;
-        let f1 = detect_all(&img1, &det)?;
+        let f1 = detect_all(&img1, &det, &capped)?;
         for (n, path, h) in &sc.pairs {
             let img2 = crate::image::load_gray(path)?;
-            let f2 = detect_all(&img2, &det)?;
+            let f2 = detect_all(&img2, &det, &capped)?;
             for ((key, budget), a) in &f1 {
                 let b = &f2[&(key.clone(), *budget)];
                 let score = score_pair(
@@ -316,7 +335,9 @@ pub fn run(opts: &Options) -> Result<()> {
          its warped position lies within {EPS} px of one in the other image (one-to-one, closest first), over the \
          common region; repeatability = repeated / min(common keypoints); matching score = cross-checked \
          nearest-neighbour descriptor matches that repeat / min(common keypoints). Budgets: every keypoint \
-         (\"all\"; ORB is always capped, at 500 by default) and the top N by response. FAST-9 is single-scale. \
+         (\"all\"; ORB is always capped, at 500 by default) and N, each detector with its own cap of N: L-FAST \
+         `n_features = N` (SPEC 9's per-level quotas), ORB and ORB-SLAM `nfeatures = N`; FAST-9, single-scale and \
+         without a cap, keeps its top N scores. \
          Means over the pairs. Files: `repeatability.csv`, `repeatability_<scene>.png`.\n\n{}\n{plots}",
         opts.homography.display(),
         scenes.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", "),
