@@ -6,12 +6,15 @@ Oxford-format scenes of ../shared/data/homography and scores the keypoints
 with the protocol of `lfast eval repeatability` (docs/evaluation.md, suite 4):
 image 1 against images 2..N, common region, one-to-one pairs closest first
 within eps, repeatability = pairs / min(common), matching score = cross-checked
-Hamming matches within eps / min(common).
+Hamming matches within eps / min(common). The `variants` section runs each
+variant with its own cap, `n_features = budget`, as the suite does since
+2026-11-26; `--top-n` cuts the uncapped output to the top N by response
+instead (the suite's protocol before, and that of the other sections).
 
     python3 scripts/quality_diag.py [--data ../shared/data/homography] [--budget 500] [SECTION ...]
 
 Sections: levels, localisation, loss, candidates, swap, snap (default: all), and
-snaprank, gate, variants, rerank, vo (VO ATE over the twenty RANSAC seeds of `lfast eval vo`; needs ../kitti beside --data).
+snaprank, gate, variants, rerank, xscale, quotas, vo (VO ATE over the twenty RANSAC seeds of `lfast eval vo`; needs ../kitti beside --data).
 Needs numpy and opencv-python (cv2 FAST/ORB for the references, cv2.cornerHarris).
 """
 import argparse
@@ -483,26 +486,30 @@ VARIANTS = {
     "branch s3, snap 1": {"mode": "branch", "support": 3, "snap_radius": 1},
     "branch s3, nms 4, snap 2": {"mode": "branch", "support": 3, "nms_radius": 4, "snap_radius": 2},
     "paper s3": {"mode": "paper", "support": 3, "snap_radius": 0},
-    "paper s3, snap 1 (default)": {"mode": "paper", "support": 3, "snap_radius": 1},
+    "paper s3, snap 1": {"mode": "paper", "support": 3, "snap_radius": 1},
     "paper s3, nms 4, snap 1": {"mode": "paper", "support": 3, "nms_radius": 4, "snap_radius": 1},
     "paper s3, nms 4, snap 2": {"mode": "paper", "support": 3, "nms_radius": 4, "snap_radius": 2},
     "paper s3, snap 1, no edges": {"mode": "paper", "support": 3, "snap_radius": 1, "reject_edges": True},
     "paper s3, nms 4, snap 2, no edges": {"mode": "paper", "support": 3, "nms_radius": 4, "snap_radius": 2, "reject_edges": True},
+    "paper s3, nms 4, snap 2, no edges, 180 bins (default)": {
+        "mode": "paper", "support": 3, "nms_radius": 4, "snap_radius": 2, "reject_edges": True, "orientation_bins": 180},
 }
-# Every variant names nms_radius, snap_radius and reject_edges (3, 0, false unless given).
-SPELLED = {"nms_radius": 3, "snap_radius": 0, "reject_edges": False}
+# Every variant names nms_radius, snap_radius, reject_edges and orientation_bins
+# (3, 0, false, 30 = SPEC's unless given).
+SPELLED = {"nms_radius": 3, "snap_radius": 0, "reject_edges": False, "orientation_bins": 30}
 VARIANTS = {n: dict(SPELLED, **v) for n, v in VARIANTS.items()}
 
 
 def section_variants(a):
-    print(f"\n## variants: repeatability / matching score per scene at budget {a.budget} (lfast detect, CPU)")
+    how = "top N of the uncapped output by response" if a.top_n else "n_features = N"
+    print(f"\n## variants: repeatability / matching score per scene at budget N = {a.budget}, {how} (lfast detect, CPU)")
     names = [n for n in VARIANTS if not a.only or n in a.only]
     sc = [s[0] for s in scenes(a.data)]
     print("| variant | " + " | ".join(sc) + " | mean over pairs |")
     print("|---|" + "---:|" * (len(sc) + 1))
     paths = sorted({p for _, r, _, i, _ in all_pairs(a.data) for p in (r, i)})
     for n in names:
-        res = lfast(paths, VARIANTS[n])
+        res = lfast(paths, VARIANTS[n] if a.top_n else dict({"n_features": a.budget}, **VARIANTS[n]))
         per, allp = {}, []
         for name, ref, k, img, h in all_pairs(a.data):
             (k1, d1), (k2, d2) = top(*res[ref], a.budget), top(*res[img], a.budget)
@@ -552,6 +559,96 @@ def section_rerank(a):
         sys.stdout.flush()
 
 
+def cross_scale_keep(k, r, dl):
+    """False for a keypoint with a stronger one (response, then earlier row) at
+    another level at most `dl` levels away, within r * 1.2^max(levels) px."""
+    xy, resp, lev = k[:, :2], k[:, 4], k[:, 5].astype(int)
+    keep = np.ones(len(k), bool)
+    for i in range(len(k)):
+        d = np.hypot(*(xy - xy[i]).T)
+        other = (lev != lev[i]) & (np.abs(lev - lev[i]) <= dl)
+        near = other & (d <= r * SCALE ** np.maximum(lev, lev[i]))
+        stronger = (resp > resp[i]) | ((resp == resp[i]) & (np.arange(len(k)) < i))
+        keep[i] = not np.any(near & stronger)
+    return keep
+
+
+def section_xscale(a):
+    """The default's uncapped keypoints without those that a stronger keypoint
+    of a neighbouring level duplicates (one corner, one scale), top N."""
+    print(f"\n## xscale: the default's uncapped keypoints less cross-level duplicates, top {a.budget} (rep / MS)")
+    print("| suppression | " + " | ".join(s[0] for s in scenes(a.data)) + " | mean over pairs | kept |")
+    print("|---|" + "---:|" * (len(scenes(a.data)) + 2))
+    paths = sorted({p for _, r, _, i, _ in all_pairs(a.data) for p in (r, i)})
+    res = lfast(paths, {})
+    for name, r, dl in (("none", 0, 0), ("within 1 level px, levels ±1", 1.0, 1), ("within 1.5 level px, levels ±1", 1.5, 1),
+                        ("within 2 level px, levels ±1", 2.0, 1), ("within 1.5 level px, levels ±2", 1.5, 2)):
+        keeps = {p: np.ones(len(res[p][0]), bool) if r == 0 else cross_scale_keep(res[p][0], r, dl) for p in paths}
+        per, allp = {}, []
+        for sc, ref, k, img, h in all_pairs(a.data):
+            sel = []
+            for p in (ref, img):
+                kk, idx = res[p][0], np.nonzero(keeps[p])[0]
+                o = idx[np.argsort(-kk[idx, 4], kind="stable")[:a.budget]]
+                sel.append((kk[o, :2], res[p][1][o]))
+            rr, m, *_ = score(sel[0][0], sel[0][1], gray(ref).shape, sel[1][0], sel[1][1], gray(img).shape, h)
+            per.setdefault(sc, []).append((rr, m))
+            allp.append((rr, m))
+        cell = lambda v: f"{100 * np.mean([x[0] for x in v]):.1f} / {100 * np.mean([x[1] for x in v]):.1f}"
+        kept = np.mean([keeps[p].mean() for p in paths])
+        print(f"| {name} | " + " | ".join(cell(per[s[0]]) for s in scenes(a.data)) + f" | {cell(allp)} | {100 * kept:.0f}% |")
+        sys.stdout.flush()
+
+
+def quota_pick(k, n, carry, ratio=1 / SCALE):
+    """Indices of the top keypoints per level by response under geometric
+    quotas, `ratio` from one level to the next over 8 levels (ORB's 1/1.2; the
+    last level takes the rest; 1/1.44 is about SPEC 9's area quotas); with
+    `carry`, what a level cannot fill passes to the next."""
+    f = ratio
+    per = n * (1 - f) / (1 - f ** 8)
+    quotas = [int(round(per * f ** l)) for l in range(7)]
+    quotas.append(max(n - sum(quotas), 0))
+    lev, out, spare = k[:, 5].astype(int), [], 0
+    for l, q in enumerate(quotas):
+        idx = np.nonzero(lev == l)[0]
+        take = idx[np.argsort(-k[idx, 4], kind="stable")[: q + spare]]
+        spare = q + spare - len(take) if carry else 0
+        out.extend(take)
+    out = np.array(out, int)
+    return out[np.argsort(-k[out, 4], kind="stable")]
+
+
+def section_quotas(a):
+    """The default's uncapped keypoints under ORB's per-level quotas, N in all."""
+    print(f"\n## quotas: the default's uncapped keypoints, {a.budget} by ORB's per-level quotas (rep / MS)")
+    print("| selection | " + " | ".join(s[0] for s in scenes(a.data)) + " | mean over pairs |")
+    print("|---|" + "---:|" * (len(scenes(a.data)) + 1))
+    paths = sorted({p for _, r, _, i, _ in all_pairs(a.data) for p in (r, i)})
+    res = lfast(paths, {})
+    pickers = {
+        "top N by Harris (the default)": lambda k: np.argsort(-k[:, 4], kind="stable")[: a.budget],
+        "ORB's quotas (ratio 1/1.2)": lambda k: quota_pick(k, a.budget, False),
+        "ORB's quotas, a short level's rest to the next": lambda k: quota_pick(k, a.budget, True),
+        "area quotas (ratio 1/1.44, as SPEC 9's cap)": lambda k: quota_pick(k, a.budget, False, 1 / SCALE**2),
+        "quotas, ratio 1/1.1": lambda k: quota_pick(k, a.budget, False, 1 / 1.1),
+        "quotas, ratio 1 (equal)": lambda k: quota_pick(k, a.budget, False, 0.999999),
+    }
+    for name, pick in pickers.items():
+        per, allp = {}, []
+        for sc, ref, k, img, h in all_pairs(a.data):
+            sel = []
+            for p in (ref, img):
+                o = pick(res[p][0])
+                sel.append((res[p][0][o, :2], res[p][1][o]))
+            rr, m, *_ = score(sel[0][0], sel[0][1], gray(ref).shape, sel[1][0], sel[1][1], gray(img).shape, h)
+            per.setdefault(sc, []).append((rr, m))
+            allp.append((rr, m))
+        cell = lambda v: f"{100 * np.mean([x[0] for x in v]):.1f} / {100 * np.mean([x[1] for x in v]):.1f}"
+        print(f"| {name} | " + " | ".join(cell(per[s[0]]) for s in scenes(a.data)) + f" | {cell(allp)} |")
+        sys.stdout.flush()
+
+
 SEEDS = [24301] + list(range(1, 20))  # eval::vo::SEEDS
 
 
@@ -559,8 +656,8 @@ def section_vo(a):
     """VO ATE over the RANSAC seeds and the level-0 count (target d) of each variant."""
     seq = os.path.join(a.data, "..", "kitti", "seq01_000000-000050")
     print(f"\n## vo: `lfast vo` ATE RMSE (SE(3)) over RANSAC seeds {SEEDS}, and level-0 keypoints per frame (n_levels 1, no cap)")
-    print("| variant | ATE mean (m) | min | max | keypoints/frame | level-0 keypoints/frame |")
-    print("|---|---:|---:|---:|---:|---:|")
+    print("| variant | ATE mean (m) | standard error | min | max | keypoints/frame | level-0 keypoints/frame |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
     frames = sorted(os.path.join(seq, "image_0", f) for f in os.listdir(os.path.join(seq, "image_0")))
     rows = [(n, VARIANTS[n]) for n in VARIANTS if not a.only or n in a.only]
     rows += [(f, None) for f in ("fast", "orbslam") if not a.only or f in a.only]
@@ -582,7 +679,8 @@ def section_vo(a):
         if cfg is not None:
             res = lfast(frames, dict(cfg, n_levels=1))
             l0 = f"{np.mean([len(res[p][0]) for p in frames]):.0f}"
-        print(f"| {n} | {np.mean(ates):.3f} | {min(ates):.3f} | {max(ates):.3f} | {kp} | {l0} |")
+        se = np.std(ates, ddof=1) / np.sqrt(len(ates)) if len(ates) > 1 else float("nan")
+        print(f"| {n} | {np.mean(ates):.3f} | {se:.3f} | {min(ates):.3f} | {max(ates):.3f} | {kp} | {l0} |")
         sys.stdout.flush()
 
 
@@ -590,6 +688,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--data", default=os.path.join(ROOT, "..", "shared", "data", "homography"))
     ap.add_argument("--budget", type=int, default=500)
+    ap.add_argument("--top-n", action="store_true",
+                    help="variants section: the top N of the uncapped output by response instead of n_features = N")
     ap.add_argument("--only", action="append", help="variants and vo sections: only these variants (repeatable)")
     ap.add_argument("--seeds", metavar="A-B", help="vo section: RANSAC seeds A..=B instead of the eval's twenty")
     ap.add_argument("--variant", action="append", default=[], metavar="NAME=JSON",
