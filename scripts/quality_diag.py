@@ -521,6 +521,20 @@ def section_variants(a):
         sys.stdout.flush()
 
 
+def score_selections(a, res, name, pick, extra=""):
+    """One table row: rep / MS per scene and over all pairs of the keypoints
+    `pick(p)` (indices into res[p]) selects in every image p."""
+    per, allp = {}, []
+    for sc, ref, k, img, h in all_pairs(a.data):
+        (k1, d1), (k2, d2) = ((res[p][0][o, :2], res[p][1][o]) for p in (ref, img) for o in [pick(p)])
+        r, m, *_ = score(k1, d1, gray(ref).shape, k2, d2, gray(img).shape, h)
+        per.setdefault(sc, []).append((r, m))
+        allp.append((r, m))
+    cell = lambda v: f"{100 * np.mean([x[0] for x in v]):.1f} / {100 * np.mean([x[1] for x in v]):.1f}"
+    print(f"| {name} | " + " | ".join(cell(per[s[0]]) for s in scenes(a.data)) + f" | {cell(allp)} |{extra}")
+    sys.stdout.flush()
+
+
 def section_rerank(a):
     """The default's uncapped keypoints ranked for the cap by another score, top N."""
     print(f"\n## rerank: the default's uncapped keypoints, top {a.budget} by another score (rep / MS)")
@@ -545,18 +559,7 @@ def section_rerank(a):
         return out
 
     for kind in ("harris", "min eigenvalue", "harris x 1.2^-2 level", "harris x 1.2^-1 level", "harris x 1.2^1 level", "harris x 1.2^2 level"):
-        per, allp = {}, []
-        for name, ref, k, img, h in all_pairs(a.data):
-            sel = []
-            for p in (ref, img):
-                o = np.argsort(-score_of(p, kind), kind="stable")[:a.budget]
-                sel.append((res[p][0][o, :2], res[p][1][o]))
-            r, m, *_ = score(sel[0][0], sel[0][1], gray(ref).shape, sel[1][0], sel[1][1], gray(img).shape, h)
-            per.setdefault(name, []).append((r, m))
-            allp.append((r, m))
-        cell = lambda v: f"{100 * np.mean([x[0] for x in v]):.1f} / {100 * np.mean([x[1] for x in v]):.1f}"
-        print(f"| {kind} | " + " | ".join(cell(per[s[0]]) for s in scenes(a.data)) + f" | {cell(allp)} |")
-        sys.stdout.flush()
+        score_selections(a, res, kind, lambda p: np.argsort(-score_of(p, kind), kind="stable")[:a.budget])
 
 
 def cross_scale_keep(k, r, dl):
@@ -584,20 +587,13 @@ def section_xscale(a):
     for name, r, dl in (("none", 0, 0), ("within 1 level px, levels ±1", 1.0, 1), ("within 1.5 level px, levels ±1", 1.5, 1),
                         ("within 2 level px, levels ±1", 2.0, 1), ("within 1.5 level px, levels ±2", 1.5, 2)):
         keeps = {p: np.ones(len(res[p][0]), bool) if r == 0 else cross_scale_keep(res[p][0], r, dl) for p in paths}
-        per, allp = {}, []
-        for sc, ref, k, img, h in all_pairs(a.data):
-            sel = []
-            for p in (ref, img):
-                kk, idx = res[p][0], np.nonzero(keeps[p])[0]
-                o = idx[np.argsort(-kk[idx, 4], kind="stable")[:a.budget]]
-                sel.append((kk[o, :2], res[p][1][o]))
-            rr, m, *_ = score(sel[0][0], sel[0][1], gray(ref).shape, sel[1][0], sel[1][1], gray(img).shape, h)
-            per.setdefault(sc, []).append((rr, m))
-            allp.append((rr, m))
-        cell = lambda v: f"{100 * np.mean([x[0] for x in v]):.1f} / {100 * np.mean([x[1] for x in v]):.1f}"
+
+        def pick(p):
+            idx = np.nonzero(keeps[p])[0]
+            return idx[np.argsort(-res[p][0][idx, 4], kind="stable")[:a.budget]]
+
         kept = np.mean([keeps[p].mean() for p in paths])
-        print(f"| {name} | " + " | ".join(cell(per[s[0]]) for s in scenes(a.data)) + f" | {cell(allp)} | {100 * kept:.0f}% |")
-        sys.stdout.flush()
+        score_selections(a, res, name, pick, f" {100 * kept:.0f}% |")
 
 
 def quota_pick(k, n, carry, ratio=1 / SCALE):
@@ -620,8 +616,8 @@ def quota_pick(k, n, carry, ratio=1 / SCALE):
 
 
 def section_quotas(a):
-    """The default's uncapped keypoints under ORB's per-level quotas, N in all."""
-    print(f"\n## quotas: the default's uncapped keypoints, {a.budget} by ORB's per-level quotas (rep / MS)")
+    """The default's uncapped keypoints under per-level quotas, N in all."""
+    print(f"\n## quotas: the default's uncapped keypoints, {a.budget} under per-level quotas (rep / MS)")
     print("| selection | " + " | ".join(s[0] for s in scenes(a.data)) + " | mean over pairs |")
     print("|---|" + "---:|" * (len(scenes(a.data)) + 1))
     paths = sorted({p for _, r, _, i, _ in all_pairs(a.data) for p in (r, i)})
@@ -635,18 +631,7 @@ def section_quotas(a):
         "quotas, ratio 1 (equal)": lambda k: quota_pick(k, a.budget, False, 0.999999),
     }
     for name, pick in pickers.items():
-        per, allp = {}, []
-        for sc, ref, k, img, h in all_pairs(a.data):
-            sel = []
-            for p in (ref, img):
-                o = pick(res[p][0])
-                sel.append((res[p][0][o, :2], res[p][1][o]))
-            rr, m, *_ = score(sel[0][0], sel[0][1], gray(ref).shape, sel[1][0], sel[1][1], gray(img).shape, h)
-            per.setdefault(sc, []).append((rr, m))
-            allp.append((rr, m))
-        cell = lambda v: f"{100 * np.mean([x[0] for x in v]):.1f} / {100 * np.mean([x[1] for x in v]):.1f}"
-        print(f"| {name} | " + " | ".join(cell(per[s[0]]) for s in scenes(a.data)) + f" | {cell(allp)} |")
-        sys.stdout.flush()
+        score_selections(a, res, name, lambda p: pick(res[p][0]))
 
 
 SEEDS = [24301] + list(range(1, 20))  # eval::vo::SEEDS
