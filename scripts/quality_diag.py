@@ -521,6 +521,16 @@ def section_variants(a):
         sys.stdout.flush()
 
 
+def selection_table(a, title, first, extra=""):
+    """Prints a selection table's title and header; returns the default's
+    uncapped keypoints of every image of --data and their paths."""
+    print(f"\n## {title} (rep / MS)")
+    print(f"| {first} | " + " | ".join(s[0] for s in scenes(a.data)) + f" | mean over pairs |{extra}")
+    print("|---|" + "---:|" * (len(scenes(a.data)) + 1 + bool(extra)))
+    paths = sorted({p for _, r, _, i, _ in all_pairs(a.data) for p in (r, i)})
+    return lfast(paths, {}), paths
+
+
 def score_selections(a, res, name, pick, extra=""):
     """One table row: rep / MS per scene and over all pairs of the keypoints
     `pick(p)` (indices into res[p]) selects in every image p."""
@@ -537,11 +547,7 @@ def score_selections(a, res, name, pick, extra=""):
 
 def section_rerank(a):
     """The default's uncapped keypoints ranked for the cap by another score, top N."""
-    print(f"\n## rerank: the default's uncapped keypoints, top {a.budget} by another score (rep / MS)")
-    print("| ranking | " + " | ".join(s[0] for s in scenes(a.data)) + " | mean over pairs |")
-    print("|---|" + "---:|" * (len(scenes(a.data)) + 1))
-    paths = sorted({p for _, r, _, i, _ in all_pairs(a.data) for p in (r, i)})
-    res = lfast(paths, {})
+    res, _ = selection_table(a, f"rerank: the default's uncapped keypoints, top {a.budget} by another score", "ranking")
     eig = {}
 
     def score_of(p, kind):
@@ -579,11 +585,8 @@ def cross_scale_keep(k, r, dl):
 def section_xscale(a):
     """The default's uncapped keypoints without those that a stronger keypoint
     of a neighbouring level duplicates (one corner, one scale), top N."""
-    print(f"\n## xscale: the default's uncapped keypoints less cross-level duplicates, top {a.budget} (rep / MS)")
-    print("| suppression | " + " | ".join(s[0] for s in scenes(a.data)) + " | mean over pairs | kept |")
-    print("|---|" + "---:|" * (len(scenes(a.data)) + 2))
-    paths = sorted({p for _, r, _, i, _ in all_pairs(a.data) for p in (r, i)})
-    res = lfast(paths, {})
+    res, paths = selection_table(
+        a, f"xscale: the default's uncapped keypoints less cross-level duplicates, top {a.budget}", "suppression", " kept |")
     for name, r, dl in (("none", 0, 0), ("within 1 level px, levels ±1", 1.0, 1), ("within 1.5 level px, levels ±1", 1.5, 1),
                         ("within 2 level px, levels ±1", 2.0, 1), ("within 1.5 level px, levels ±2", 1.5, 2)):
         keeps = {p: np.ones(len(res[p][0]), bool) if r == 0 else cross_scale_keep(res[p][0], r, dl) for p in paths}
@@ -617,11 +620,7 @@ def quota_pick(k, n, carry, ratio=1 / SCALE):
 
 def section_quotas(a):
     """The default's uncapped keypoints under per-level quotas, N in all."""
-    print(f"\n## quotas: the default's uncapped keypoints, {a.budget} under per-level quotas (rep / MS)")
-    print("| selection | " + " | ".join(s[0] for s in scenes(a.data)) + " | mean over pairs |")
-    print("|---|" + "---:|" * (len(scenes(a.data)) + 1))
-    paths = sorted({p for _, r, _, i, _ in all_pairs(a.data) for p in (r, i)})
-    res = lfast(paths, {})
+    res, _ = selection_table(a, f"quotas: the default's uncapped keypoints, {a.budget} under per-level quotas", "selection")
     pickers = {
         "top N by Harris (the default)": lambda k: np.argsort(-k[:, 4], kind="stable")[: a.budget],
         "ORB's quotas (ratio 1/1.2)": lambda k: quota_pick(k, a.budget, False),
