@@ -6,7 +6,7 @@ use super::illumination::IllumSummary;
 use super::kitti::KittiSummary;
 use super::output::read_summary;
 use super::repeatability::RepeatSummary;
-use super::{Result, SPEC_BINS, SPEC_NMS_RADIUS, Suite, Variant, mode_name};
+use super::{Departure, Result, SPEC_BINS, SPEC_NMS_RADIUS, Suite, Variant, mode_name};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -162,20 +162,17 @@ pub fn decide(out: &Path) -> Result<Option<Decision>> {
 }
 
 fn variant_label(v: Variant) -> String {
-    let mut s = format!("{} / support {}", mode_name(v.mode), v.support);
-    if v.nms != SPEC_NMS_RADIUS {
-        s += &format!(" / nms {}", v.nms);
-    }
-    if v.snap > 0 {
-        s += &format!(" / snap {}", v.snap);
-    }
-    if v.reject_edges {
-        s += " / no edges";
-    }
-    if v.bins != SPEC_BINS {
-        s += &format!(" / {} bins", v.bins);
-    }
-    s
+    let rest: String = v
+        .departures()
+        .into_iter()
+        .map(|d| match d {
+            Departure::Nms(r) => format!(" / nms {r}"),
+            Departure::Snap(s) => format!(" / snap {s}"),
+            Departure::NoEdges => " / no edges".into(),
+            Departure::Bins(b) => format!(" / {b} bins"),
+        })
+        .collect();
+    format!("{} / support {}{rest}", mode_name(v.mode), v.support)
 }
 
 impl Decision {
@@ -309,5 +306,19 @@ impl Decision {
         }
         let _ = writeln!(s, "\n**{}**\n", self.verdict());
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn variant_labels_name_each_departure_from_spec() {
+        assert_eq!(variant_label(Variant::ALL[0]), "paper / support 3");
+        assert_eq!(variant_label(Variant::ALL[8]), "paper / support 3 / nms 4 / snap 2 / no edges / 180 bins");
+        assert_eq!(Variant::ALL[8].key(), "lfast-paper-s3-nms4-snap2-noedges-bins180");
+        assert_eq!(Variant::ALL[8].label(), "L-FAST paper s3 nms4 snap2 no edges bins180");
+        assert_eq!(Variant::ALL[5].label(), "L-FAST branch s3 snap1");
     }
 }

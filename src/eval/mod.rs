@@ -201,6 +201,19 @@ const fn with_bins(v: Variant, bins: u32) -> Variant {
     Variant { bins, ..v }
 }
 
+/// One way a [`Variant`] departs from SPEC (mode and support aside).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Departure {
+    /// A corner-NMS radius other than SPEC 9's.
+    Nms(u32),
+    /// Corners snapped to the Harris peak within this radius.
+    Snap(u32),
+    /// Candidates with a Harris response not above 0 dropped.
+    NoEdges,
+    /// An orientation bin count other than SPEC 11's.
+    Bins(u32),
+}
+
 impl Variant {
     /// The candidates: {Paper, Branch} x support {3, 4} as the paper's corners;
     /// the two support-3 ones with their corners snapped within 1 px; paper
@@ -228,31 +241,51 @@ impl Variant {
     /// A stable key for files and JSON, e.g. `lfast-branch-s4`, `lfast-branch-s3-snap1`,
     /// `lfast-paper-s3-nms4-snap2-noedges`, `lfast-paper-s3-nms4-snap2-noedges-bins180`.
     pub fn key(self) -> String {
-        format!("lfast-{}", self.words().join("-"))
+        let rest: String = self
+            .departures()
+            .into_iter()
+            .map(|d| match d {
+                Departure::Nms(r) => format!("-nms{r}"),
+                Departure::Snap(s) => format!("-snap{s}"),
+                Departure::NoEdges => "-noedges".into(),
+                Departure::Bins(b) => format!("-bins{b}"),
+            })
+            .collect();
+        format!("lfast-{}-s{}{rest}", mode_name(self.mode), self.support)
     }
 
     /// Display name: `L-FAST paper s3`, `L-FAST paper s3 nms4 snap2 no edges`.
     pub fn label(self) -> String {
-        format!("L-FAST {}", self.words().join(" ").replace("noedges", "no edges"))
+        let rest: String = self
+            .departures()
+            .into_iter()
+            .map(|d| match d {
+                Departure::Nms(r) => format!(" nms{r}"),
+                Departure::Snap(s) => format!(" snap{s}"),
+                Departure::NoEdges => " no edges".into(),
+                Departure::Bins(b) => format!(" bins{b}"),
+            })
+            .collect();
+        format!("L-FAST {} s{}{rest}", mode_name(self.mode), self.support)
     }
 
-    /// What sets this variant apart, one word each: mode, support, then any
-    /// NMS radius, snap, edge rejection or bin count other than SPEC's.
-    fn words(self) -> Vec<String> {
-        let mut w = vec![mode_name(self.mode).to_string(), format!("s{}", self.support)];
+    /// Where this variant departs from SPEC beyond mode and support, in a
+    /// fixed order; keys, labels and the decision table each spell these.
+    pub(crate) fn departures(self) -> Vec<Departure> {
+        let mut d = Vec::new();
         if self.nms != SPEC_NMS_RADIUS {
-            w.push(format!("nms{}", self.nms));
+            d.push(Departure::Nms(self.nms));
         }
         if self.snap > 0 {
-            w.push(format!("snap{}", self.snap));
+            d.push(Departure::Snap(self.snap));
         }
         if self.reject_edges {
-            w.push("noedges".into());
+            d.push(Departure::NoEdges);
         }
         if self.bins != SPEC_BINS {
-            w.push(format!("bins{}", self.bins));
+            d.push(Departure::Bins(self.bins));
         }
-        w
+        d
     }
 
     /// The configuration fields as TOML-like text, for reports.
