@@ -116,7 +116,12 @@ where
     for x0 in chunk_starts(1, w - 1) {
         let (u, d) = (chunk(up, x0), chunk(down, x0));
         let (l, c, r) = (chunk(mid, x0 - 1), chunk(mid, x0), chunk(mid, x0 + 1));
-        let flags: [bool; CHUNK] = std::array::from_fn(|t| flag(u[t], l[t], c[t], r[t], d[t]));
+        // A plain loop, not `array::from_fn`: that one is not inlined into
+        // the AVX2 build and ran scalar (4% of a frame in perf).
+        let mut flags = [false; CHUNK];
+        for t in 0..CHUNK {
+            flags[t] = flag(u[t], l[t], c[t], r[t], d[t]);
+        }
         let o: &mut [u8; CHUNK] = (&mut out[x0..x0 + CHUNK]).try_into().expect("CHUNK bytes");
         if flags.iter().fold(false, |a, &f| a | f) {
             let [ul, ur, dl, dr] =
