@@ -148,6 +148,22 @@ pub(crate) struct BandHistograms {
     max_rows: u32,
 }
 
+dispatch! {
+    /// [`BandHistograms::flush`]'s loop: each cell's four u16 sub-histograms
+    /// added into its u32 one (and cleared when `clear`), 16 bins a vector
+    /// with AVX2.
+    fn merge_quads(quads: &mut [[[u16; 256]; 4]], cells: &mut [[u32; 256]], clear: bool) {
+        for (q, cell) in quads.iter_mut().zip(cells.iter_mut()) {
+            for (b, c) in cell.iter_mut().enumerate() {
+                *c += q[0][b] as u32 + q[1][b] as u32 + q[2][b] as u32 + q[3][b] as u32;
+            }
+            if clear {
+                *q = [[0; 256]; 4];
+            }
+        }
+    }
+}
+
 impl BandHistograms {
     /// Histograms for the cells cut at `cx` (`cx.len() - 1` cells).
     pub fn new(cx: &[u32]) -> Self {
@@ -182,14 +198,7 @@ impl BandHistograms {
 
     /// Adds the sub-histograms into the cells' (and clears them when `clear`).
     fn flush(&mut self, clear: bool) {
-        for (q, cell) in self.quads.iter_mut().zip(&mut self.cells) {
-            for (b, c) in cell.iter_mut().enumerate() {
-                *c += q[0][b] as u32 + q[1][b] as u32 + q[2][b] as u32 + q[3][b] as u32;
-            }
-            if clear {
-                *q = [[0; 256]; 4];
-            }
-        }
+        merge_quads(&mut self.quads, &mut self.cells, clear);
         self.rows = 0;
     }
 
