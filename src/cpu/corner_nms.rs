@@ -143,37 +143,63 @@ impl Square<'_> {
     /// Whether a key in the square beats `kp`: a greater one, or an equal one
     /// at an earlier position. One compare per lane against a threshold:
     /// `kp - 1` where equal beats (the rows above, the left of p's row), `kp`
-    /// where only greater does, `i32::MAX` on lanes past the square.
+    /// where only greater does, `i32::MAX` on lanes past the square. The rows
+    /// are read nearest first (p's own, then one above and one below, ...),
+    /// and the first row that beats p ends the search: most candidates lose
+    /// to a neighbour on the edge they lie on, in their own row or the next.
     #[inline(always)]
     fn beaten(&self, kp: i32, side: usize, chunks: usize) -> bool {
         let r = side / 2;
-        let mut acc = [0i32; LANES];
-        for c in 0..chunks {
-            let threshold = |earlier: usize| -> [i32; LANES] {
-                std::array::from_fn(|i| match c * LANES + i {
-                    lane if lane >= side => i32::MAX,
-                    lane if lane < earlier => kp - 1,
-                    _ => kp,
-                })
-            };
-            let (above, centre, below) = (threshold(side), threshold(r), threshold(0));
-            for j in 0..side {
-                let t = if j < r {
-                    &above
-                } else if j == r {
-                    &centre
-                } else {
-                    &below
-                };
-                let sl = if self.top + j >= side { self.top + j - side } else { self.top + j };
-                let v: &[i32; LANES] =
-                    self.ring[sl * self.width + self.x + c * LANES..][..LANES].try_into().expect("LANES keys");
+        // per chunk: the thresholds of the rows above, p's row and the rows below
+        let mut t = [[[0i32; LANES]; 3]; 2];
+        for (c, tc) in t.iter_mut().enumerate().take(chunks.min(2)) {
+            for (k, earlier) in [side, r, 0].into_iter().enumerate() {
                 for i in 0..LANES {
-                    acc[i] |= (v[i] > t[i]) as i32;
+                    let lane = c * LANES + i;
+                    tc[k][i] = if lane >= side {
+                        i32::MAX
+                    } else if lane < earlier {
+                        kp - 1
+                    } else {
+                        kp
+                    };
                 }
             }
         }
-        acc.iter().fold(0, |a, &b| a | b) != 0
+        let row_beats = |j: usize| -> bool {
+            let k = (j >= r) as usize + (j > r) as usize;
+            let sl = if self.top + j >= side { self.top + j - side } else { self.top + j };
+            let row = &self.ring[sl * self.width + self.x..];
+            let mut acc = [0i32; LANES];
+            for c in 0..chunks {
+                let v: &[i32; LANES] = row[c * LANES..][..LANES].try_into().expect("LANES keys");
+                let th = if c < 2 { t[c][k] } else { self.threshold(kp, side, c, [side, r, 0][k]) };
+                for i in 0..LANES {
+                    acc[i] |= (v[i] > th[i]) as i32;
+                }
+            }
+            acc.iter().fold(0, |a, &b| a | b) != 0
+        };
+        if row_beats(r) {
+            return true;
+        }
+        (1..=r).any(|d| row_beats(r - d) || row_beats(r + d))
+    }
+
+    /// The thresholds of chunk `c` of a row whose first `earlier` lanes lie
+    /// before p (for squares wider than two chunks, radius 8 and up).
+    #[inline(always)]
+    fn threshold(&self, kp: i32, side: usize, c: usize, earlier: usize) -> [i32; LANES] {
+        let mut t = [kp; LANES];
+        for (i, t) in t.iter_mut().enumerate() {
+            let lane = c * LANES + i;
+            if lane >= side {
+                *t = i32::MAX;
+            } else if lane < earlier {
+                *t = kp - 1;
+            }
+        }
+        t
     }
 }
 
