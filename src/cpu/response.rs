@@ -155,11 +155,13 @@ fn harris_rect<const F: usize, const SY: usize, const SX: usize>(
 fn sums_rect<const F: usize, const G: usize, const SY: usize, const SX: usize>(
     rows: &[[u8; 18]; F],
 ) -> [[[i32; SX]; SY]; 3] {
-    let mut h = [[0i32; 16]; F];
-    let mut s = [[0i32; 16]; F];
+    // |h| <= 255, s <= 1020, and so |Ix|, |Iy| <= 1020: i16 lanes hold them
+    // (16 to a vector); the products need i32.
+    let mut h = [[0i16; 16]; F];
+    let mut s = [[0i16; 16]; F];
     for (r, row) in rows.iter().enumerate() {
         for i in 0..16 {
-            let (l, m, rt) = (row[i] as i32, row[i + 1] as i32, row[i + 2] as i32);
+            let (l, m, rt) = (row[i] as i16, row[i + 1] as i16, row[i + 2] as i16);
             h[r][i] = rt - l;
             s[r][i] = l + 2 * m + rt;
         }
@@ -167,8 +169,8 @@ fn sums_rect<const F: usize, const G: usize, const SY: usize, const SX: usize>(
     let mut p = [[[0i32; 16]; G]; 3];
     for g in 0..G {
         for i in 0..16 {
-            let ix = h[g][i] + 2 * h[g + 1][i] + h[g + 2][i];
-            let iy = s[g + 2][i] - s[g][i];
+            let ix = (h[g][i] + 2 * h[g + 1][i] + h[g + 2][i]) as i32;
+            let iy = (s[g + 2][i] - s[g][i]) as i32;
             p[0][g][i] = ix * ix;
             p[1][g][i] = iy * iy;
             p[2][g][i] = ix * iy;
@@ -176,11 +178,17 @@ fn sums_rect<const F: usize, const G: usize, const SY: usize, const SX: usize>(
     }
     let mut out = [[[0i32; SX]; SY]; 3];
     for (o, p) in out.iter_mut().zip(&p) {
+        // the 7-row column sums of block row 0, then slid down a row at a time
+        let mut col = [0i32; 16];
+        for row in &p[..7] {
+            for i in 0..16 {
+                col[i] += row[i];
+            }
+        }
         for (j, o) in o.iter_mut().enumerate() {
-            let mut col = [0i32; 16];
-            for row in &p[j..j + 7] {
+            if j > 0 {
                 for i in 0..16 {
-                    col[i] += row[i];
+                    col[i] += p[j + 6][i] - p[j - 1][i];
                 }
             }
             for (i, o) in o.iter_mut().enumerate() {
