@@ -166,24 +166,29 @@ impl Square<'_> {
                 }
             }
         }
-        let row_beats = |j: usize| -> bool {
-            let k = (j >= r) as usize + (j > r) as usize;
-            let sl = if self.top + j >= side { self.top + j - side } else { self.top + j };
-            let row = &self.ring[sl * self.width + self.x..];
-            let mut acc = [0i32; LANES];
-            for c in 0..chunks {
-                let v: &[i32; LANES] = row[c * LANES..][..LANES].try_into().expect("LANES keys");
-                let th = if c < 2 { t[c][k] } else { self.threshold(kp, side, c, [side, r, 0][k]) };
-                for i in 0..LANES {
-                    acc[i] |= (v[i] > th[i]) as i32;
-                }
-            }
-            acc.iter().fold(0, |a, &b| a | b) != 0
-        };
+        let row_beats = |j: usize| self.row_beats(&t, kp, side, chunks, j);
         if row_beats(r) {
             return true;
         }
         (1..=r).any(|d| row_beats(r - d) || row_beats(r + d))
+    }
+
+    /// Whether row `j` of the square beats `kp`, with the thresholds `t` of [`Self::beaten`].
+    #[inline(always)]
+    fn row_beats(&self, t: &[[[i32; LANES]; 3]; 2], kp: i32, side: usize, chunks: usize, j: usize) -> bool {
+        let r = side / 2;
+        let k = (j >= r) as usize + (j > r) as usize;
+        let sl = if self.top + j >= side { self.top + j - side } else { self.top + j };
+        let row = &self.ring[sl * self.width + self.x..];
+        let mut acc = [0i32; LANES];
+        for c in 0..chunks {
+            let v: &[i32; LANES] = row[c * LANES..][..LANES].try_into().expect("LANES keys");
+            let th = if c < 2 { t[c][k] } else { self.threshold(kp, side, c, [side, r, 0][k]) };
+            for i in 0..LANES {
+                acc[i] |= (v[i] > th[i]) as i32;
+            }
+        }
+        acc.iter().fold(0, |a, &b| a | b) != 0
     }
 
     /// The thresholds of chunk `c` of a row whose first `earlier` lanes lie
