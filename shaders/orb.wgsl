@@ -9,6 +9,8 @@
 // Descriptor i is descriptors[8i .. 8i+8]: bit b of word k is pair 32k + b,
 // so (little-endian) bit i of byte j is pair 8j + i and the buffer's bytes
 // are the [u8; 32] descriptors.
+// With a snap (P.snap_radius > 0) and orientation bins, each sample is read
+// between pixels at the keypoint's sub-pixel position (`fine_word`).
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/orb.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
 // Races: no atomics. Invocation k of keypoint i's workgroup stores word
@@ -54,7 +56,53 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
     if (i >= counters[KEYPOINTS] || i >= P.capacity) { return; }
     let kp = keypoints[i];
     if (kp.level >= P.n_levels) { return; }
-    descriptors[8u * i + lane] = describe_word(kp, lane);
+    if (P.snap_radius > 0u && P.orientation_bins > 0u) {
+        descriptors[8u * i + lane] = fine_word(kp, lane);
+    } else {
+        descriptors[8u * i + lane] = describe_word(kp, lane);
+    }
+}
+
+// With a snap, the descriptor at the keypoint's sub-pixel position
+// (src/cpu/orb.rs `describe_fine`, docs/algorithm.md): the pixel moved by
+// Kp.sub / 16 px, the pattern of the keypoint's bin in 1/16 px, each sample
+// bilinear (`fine_sample`). The fine tables follow the whole-pixel ones in
+// `patterns`: per bin 256 pairs of two words (x1 | y1 << 16, x2 | y2 << 16,
+// i16 each), so 128 vec4 a bin, two pairs a vec4.
+fn fine_word(kp: Kp, k: u32) -> u32 {
+    let l = kp.level;
+    let sx = bitcast<i32>(kp.sub << 24u) >> 24u;
+    let sy = bitcast<i32>(kp.sub << 16u) >> 24u;
+    let ox = i32(kp.px) * 16 + sx;
+    let oy = i32(kp.py) * 16 + sy;
+    let base = P.orientation_bins * 64u + min(kp.bin, P.orientation_bins - 1u) * 128u + 16u * k;
+    var word = 0u;
+    for (var q = 0u; q < 16u; q++) {
+        let two = patterns[base + q];
+        let bits = fine_bit(two.x, two.y, l, ox, oy) | (fine_bit(two.z, two.w, l, ox, oy) << 1u);
+        word |= bits << (2u * q);
+    }
+    return word;
+}
+
+// The bit of one pair (its two words a, b) of the keypoint at (ox, oy) in 1/16 px.
+fn fine_bit(a: u32, b: u32, l: u32, ox: i32, oy: i32) -> u32 {
+    let va = fine_sample(l, ox + (bitcast<i32>(a << 16u) >> 16u), oy + (bitcast<i32>(a) >> 16u));
+    let vb = fine_sample(l, ox + (bitcast<i32>(b << 16u) >> 16u), oy + (bitcast<i32>(b) >> 16u));
+    return select(0u, 1u, va < vb);
+}
+
+// 256 times the level's value at (qx, qy) in 1/16 px, bilinear over the
+// pixels (qx, qy) >> 4 to one right and one down, reads clamped
+// (src/cpu/orb.rs `sample_fine`).
+fn fine_sample(l: u32, qx: i32, qy: i32) -> u32 {
+    let ix = qx >> 4u;
+    let iy = qy >> 4u;
+    let fx = u32(qx & 15);
+    let fy = u32(qy & 15);
+    let top = px(l, ix, iy) * (16u - fx) + px(l, ix + 1, iy) * fx;
+    let bottom = px(l, ix, iy + 1) * (16u - fx) + px(l, ix + 1, iy + 1) * fx;
+    return top * (16u - fy) + bottom * fy;
 }
 
 // Word k of keypoint kp's descriptor: pairs 32 k .. 32 k + 31.

@@ -3,7 +3,7 @@
 //! `orientation_bins = 0` (a few bits per descriptor) and the f32 angle.
 mod common;
 
-use lfast::cpu::orb::{Pattern, RotatedPatterns, describe, describe_continuous};
+use lfast::cpu::orb::{Pattern, RotatedPatterns, describe, describe_continuous, describe_fine};
 use lfast::cpu::orientation::{AngleBins, angle_deg, moments};
 use lfast::cpu::{blur, pyramid};
 use lfast::gpu::blur::BlurPass;
@@ -429,12 +429,25 @@ fn upload_smooth(ctx: &GpuContext, b: &Buffers, levels: &[Plane<u8>]) -> Vec<Pla
     smooth
 }
 
+/// Keypoint `i`'s test offset in 1/16 px: every value of -7..=7 on both axes.
+fn test_sub(i: usize) -> [i8; 2] {
+    [(i % 15) as i8 - 7, ((i / 3) % 15) as i8 - 7]
+}
+
 #[test]
 fn orb_matches_cpu_with_bins() {
+    // without a snap the descriptor at the pixel (SPEC 11); with one, at the
+    // keypoint's sub-pixel position, bilinear (orb.wgsl fine_word = orb::describe_fine)
     let Some(ctx) = t::context() else { return };
     let pass = OrbPass::new(&ctx.device);
-    for (w, h, levels, bins, seed) in [(130, 75, 4, 30, 1), (160, 120, 5, 8, 2), (97, 150, 3, 1, 3)] {
-        let cfg = Config { n_levels: levels, orientation_bins: bins, ..Config::default() };
+    for (w, h, levels, bins, seed, snap_radius) in [
+        (130, 75, 4, 30, 1, 0),
+        (160, 120, 5, 8, 2, 0),
+        (97, 150, 3, 1, 3, 0),
+        (130, 75, 4, 180, 4, 2),
+        (97, 150, 3, 8, 5, 1),
+    ] {
+        let cfg = Config { n_levels: levels, orientation_bins: bins, snap_radius, ..Config::default() };
         let img = t::test_image(w, h, seed);
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         let lv = t::cpu_levels(&cfg, &img);
@@ -445,13 +458,20 @@ fn orb_matches_cpu_with_bins() {
             // the CPU's bin half the time, any bin otherwise: each table must be exact
             let (m10, m01) = moments(&lv[k.level as usize], k.px, k.py);
             k.bin = if i % 2 == 0 { tables.bins.bin_of(m10, m01) } else { (i as u32 * 7) % bins };
+            let [sx, sy] = test_sub(i);
+            k.sub = (sx as u8 as u32) | (sy as u8 as u32) << 8;
         }
         assert!(kps.len() > 64);
         upload_keypoints(&ctx, &b, &kps);
         t::run(&ctx, &pass, &b).unwrap();
         let got = download_descriptors(&ctx, &b, kps.len() + 1);
         for (i, k) in kps.iter().enumerate() {
-            let want = describe(&smooth[k.level as usize], k.px, k.py, &tables.tables[k.bin as usize]);
+            let sm = &smooth[k.level as usize];
+            let want = if snap_radius > 0 {
+                describe_fine(sm, k.px, k.py, test_sub(i), &tables.fine[k.bin as usize])
+            } else {
+                describe(sm, k.px, k.py, &tables.tables[k.bin as usize])
+            };
             assert_eq!(got[i], want, "{w}x{h} bins {bins} keypoint {i} ({}, {}) level {}", k.px, k.py, k.level);
         }
         if kps.len() < b.layout.capacity as usize {
@@ -516,7 +536,8 @@ fn orientation_then_orb_match_the_cpu_detector_path() {
     // orientation pass writes selects the table the ORB pass reads.
     let Some(ctx) = t::context() else { return };
     let (orientation, orb) = (OrientationPass::new(&ctx.device), OrbPass::new(&ctx.device));
-    let cfg = Config { n_levels: 4, ..Config::default() };
+    // no snap: the keypoints carry no sub-pixel offset (orb_matches_cpu_with_bins covers it)
+    let cfg = Config { n_levels: 4, snap_radius: 0, ..Config::default() };
     let (w, h) = (130, 75);
     let img = t::test_image(w, h, 9);
     let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();

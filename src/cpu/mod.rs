@@ -307,7 +307,7 @@ impl CpuDetector {
             .par_iter()
             .map(|c| {
                 let (kp, bin) = self.keypoint(levels, c, centre);
-                (kp, self.describe(&smoothed[c.level as usize], c.x, c.y, kp.angle, bin))
+                (kp, self.describe(&smoothed[c.level as usize], c, kp.angle, bin))
             })
             .unzip()
     }
@@ -361,7 +361,13 @@ impl CpuDetector {
             if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
                 return Err(bad(format!("position ({}, {}) is outside level {l} ({w}x{h})", kp.pt.x, kp.pt.y)));
             }
-            at.push(Corner { level: l, x: x as u32, y: y as u32, response: kp.response, sub: [0, 0] });
+            // with a snap, the 1/16-px offset from the pixel as detection reports it
+            let sub = if self.cfg.snap() > 0 {
+                [spec::level_subpixel(kp.pt.x, s, x), spec::level_subpixel(kp.pt.y, s, y)]
+            } else {
+                [0, 0]
+            };
+            at.push(Corner { level: l, x: x as u32, y: y as u32, response: kp.response, sub });
         }
         if self.cfg.descriptor == DescriptorKind::Opencv {
             return Ok(self.describe_opencv(&image.to_plane(), keypoints));
@@ -376,7 +382,7 @@ impl CpuDetector {
             at.par_iter()
                 .map(|c| {
                     let (kp, bin) = self.keypoint(levels, c, spec::LFAST_CENTRE);
-                    self.describe(&smoothed[c.level as usize], c.x, c.y, kp.angle, bin)
+                    self.describe(&smoothed[c.level as usize], c, kp.angle, bin)
                 })
                 .collect()
         }))
@@ -458,10 +464,13 @@ impl CpuDetector {
         (kp, bin)
     }
 
-    fn describe(&self, smoothed: &Plane<u8>, x: u32, y: u32, angle: f32, bin: u32) -> Descriptor {
+    /// The descriptor of corner `c` (SPEC 11): with a snap, at its sub-pixel
+    /// position (`orb::describe_fine`; docs/algorithm.md), else at its pixel.
+    fn describe(&self, smoothed: &Plane<u8>, c: &Corner, angle: f32, bin: u32) -> Descriptor {
         match &self.rotated {
-            Some(r) => orb::describe(smoothed, x, y, &r.tables[bin as usize]),
-            None => orb::describe_continuous(smoothed, x, y, angle, self.pattern),
+            Some(r) if self.cfg.snap() > 0 => orb::describe_fine(smoothed, c.x, c.y, c.sub, &r.fine[bin as usize]),
+            Some(r) => orb::describe(smoothed, c.x, c.y, &r.tables[bin as usize]),
+            None => orb::describe_continuous(smoothed, c.x, c.y, angle, self.pattern),
         }
     }
 }

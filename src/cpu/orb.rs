@@ -4,7 +4,8 @@
 
 use crate::image::Plane;
 use crate::keypoint::Descriptor;
-pub use crate::spec::pattern::{PATTERN_TEXT, Pair, Pattern, RotatedPatterns};
+use crate::spec::SUBPIXEL;
+pub use crate::spec::pattern::{FinePair, PATTERN_TEXT, Pair, Pattern, RotatedPatterns};
 
 /// No rotated offset exceeds this (|x|, |y| <= 15 rotated stay within 15 * sqrt(2)).
 const REACH: i32 = 22;
@@ -85,6 +86,119 @@ unsafe fn describe_avx2(data: &[u8], c: usize, w: usize, table: &[Pair; 256]) ->
             let b = _mm256_and_si256(_mm256_i32gather_epi32::<1>(base, ob), byte);
             // bit i iff I(a) < I(b)
             *out = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(b, a))) as u8;
+        }
+    }
+    d
+}
+
+/// The smoothed image between pixels, bilinearly in 1/16 px: at `(px, py)`
+/// (1/16 px, pixel k at 16 k) the pixels `(ix, iy) = (px, py) >> 4` to
+/// `(ix + 1, iy + 1)`, reads clamped, weighed by `(16 - fx, fx)` and
+/// `(16 - fy, fy)`, `(fx, fy) = (px, py) & 15`: 256 times the interpolated
+/// value, an exact integer (at most `255 * 256`).
+///
+/// ```
+/// use lfast::{Plane, cpu::orb::sample_fine};
+/// let img = Plane::from_vec(2, 2, vec![0, 160, 32, 0]).unwrap();
+/// assert_eq!(sample_fine(&img, 0, 0), 0); // on pixel (0, 0)
+/// assert_eq!(sample_fine(&img, 8, 0), 256 * 80); // halfway to (1, 0)
+/// assert_eq!(sample_fine(&img, 4, 8), 12 * 8 * 0 + 4 * 8 * 160 + 12 * 8 * 32 + 4 * 8 * 0);
+/// ```
+pub fn sample_fine(img: &Plane<u8>, px: i32, py: i32) -> u32 {
+    let (ix, iy, fx, fy) = (px >> 4, py >> 4, (px & 15) as u32, (py & 15) as u32);
+    let p = |dx: i32, dy: i32| img.clamped(ix + dx, iy + dy) as u32;
+    let top = p(0, 0) * (16 - fx) + p(1, 0) * fx;
+    let bottom = p(0, 1) * (16 - fx) + p(1, 1) * fx;
+    top * (16 - fy) + bottom * fy
+}
+
+/// The descriptor of a keypoint at a sub-pixel position (docs/algorithm.md,
+/// "The descriptor at the sub-pixel position"): pixel (x, y) moved by
+/// `sub / 16` px, each sample of `table` (offsets in 1/16 px,
+/// [`Pattern::rotated_fine`]) read by [`sample_fine`]; bit i of byte j is set
+/// iff sample a < sample b of pair `8*j + i`. Mirrors shaders/orb.wgsl `fine_word`.
+pub fn describe_fine(smoothed: &Plane<u8>, x: u32, y: u32, sub: [i8; 2], table: &[FinePair]) -> Descriptor {
+    let (ox, oy) = (x as i32 * SUBPIXEL + sub[0] as i32, y as i32 * SUBPIXEL + sub[1] as i32);
+    #[cfg(target_arch = "x86_64")]
+    if let Some(t) = table.first_chunk::<256>() {
+        let reach = t.as_flattened().iter().fold(0, |m, &v| m.max(v.unsigned_abs())) as i32;
+        let (w, h) = (smoothed.width as i32, smoothed.height as i32);
+        // the gathers read 4 bytes from (ix, iy) and (ix, iy + 1): columns
+        // up to ix + 3 (so ix + 1 is inside too), rows up to iy + 1
+        let inside = (ox - reach) >> 4 >= 0
+            && ((ox + reach) >> 4) + 3 < w
+            && (oy - reach) >> 4 >= 0
+            && ((oy + reach) >> 4) + 1 < h;
+        if inside && std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 checked just above; every sample's (ix, iy) lies in
+            // 0 <= ix, ix + 3 < w, 0 <= iy, iy + 1 < h (`inside`, with reach
+            // the table's largest offset), which is describe_fine_avx2's contract.
+            return unsafe { describe_fine_avx2(&smoothed.data, smoothed.width as usize, [ox, oy], t) };
+        }
+    }
+    let mut d = [0u8; 32];
+    for (j, byte) in d.iter_mut().enumerate() {
+        for i in 0..8 {
+            let p = table[8 * j + i];
+            let a = sample_fine(smoothed, ox + p[0] as i32, oy + p[1] as i32);
+            let b = sample_fine(smoothed, ox + p[2] as i32, oy + p[3] as i32);
+            *byte |= ((a < b) as u8) << i;
+        }
+    }
+    d
+}
+
+/// [`describe_fine`] with AVX2, 8 pairs at a time: the pairs' two points as
+/// lanes of i32 (a permute of the table's words), their pixels and
+/// fractions, two 32-bit gathers per point (pixels ix, ix + 1 of rows iy and
+/// iy + 1), the bilinear weights in 16-bit multiplies (every product and sum
+/// is below 2^16), one compare and a movemask for the byte.
+///
+/// # Safety
+/// The CPU has AVX2. `data` is a `w`-wide plane, and for every offset `(u, v)`
+/// of `table` the pixel `((o[0] + u) >> 4, (o[1] + v) >> 4) = (ix, iy)` has
+/// `0 <= ix`, `ix + 3 < w`, `0 <= iy` and `(iy + 1) * w + ix + 3 < data.len()`:
+/// so both gathered 4 bytes lie in `data`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn describe_fine_avx2(data: &[u8], w: usize, o: [i32; 2], table: &[FinePair; 256]) -> Descriptor {
+    use std::arch::x86_64::*;
+    let mut d = [0u8; 32];
+    // SAFETY (whole body): the table loads read 64 bytes = 8 pairs at pair
+    // 8j, j < 32, inside `table`; the gathers' addresses are in `data` by the contract.
+    unsafe {
+        let base = data.as_ptr().cast::<i32>();
+        let wv = _mm256_set1_epi32(w as i32);
+        let (ox, oy) = (_mm256_set1_epi32(o[0]), _mm256_set1_epi32(o[1]));
+        let (byte, fifteen, sixteen) = (_mm256_set1_epi32(0xff), _mm256_set1_epi32(15), _mm256_set1_epi32(16));
+        // words of a pair: [x1 | y1 << 16, x2 | y2 << 16]; this permute puts the
+        // four first words, then the four second words, of four pairs in a row
+        let split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
+        // 256 times the bilinear value at the points (x, y) (lanes of i32, 1/16 px)
+        let sample = |x: __m256i, y: __m256i| {
+            let (px, py) = (_mm256_add_epi32(x, ox), _mm256_add_epi32(y, oy));
+            let (ix, iy) = (_mm256_srai_epi32::<4>(px), _mm256_srai_epi32::<4>(py));
+            let (fx, fy) = (_mm256_and_si256(px, fifteen), _mm256_and_si256(py, fifteen));
+            let (gx, gy) = (_mm256_sub_epi32(sixteen, fx), _mm256_sub_epi32(sixteen, fy));
+            let at = _mm256_add_epi32(_mm256_mullo_epi32(iy, wv), ix);
+            let top = _mm256_i32gather_epi32::<1>(base, at);
+            let bottom = _mm256_i32gather_epi32::<1>(base, _mm256_add_epi32(at, wv));
+            let left_right = |r: __m256i| {
+                let (l, rt) = (_mm256_and_si256(r, byte), _mm256_and_si256(_mm256_srli_epi32::<8>(r), byte));
+                _mm256_add_epi32(_mm256_mullo_epi16(l, gx), _mm256_mullo_epi16(rt, fx))
+            };
+            _mm256_add_epi32(_mm256_mullo_epi16(left_right(top), gy), _mm256_mullo_epi16(left_right(bottom), fy))
+        };
+        for (j, out) in d.iter_mut().enumerate() {
+            let p = table.as_ptr().add(8 * j).cast::<__m256i>();
+            let lo = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(p), split);
+            let hi = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(p.add(1)), split);
+            let (a, b) = (_mm256_permute2x128_si256::<0x20>(lo, hi), _mm256_permute2x128_si256::<0x31>(lo, hi));
+            let x_of = |v: __m256i| _mm256_srai_epi32::<16>(_mm256_slli_epi32::<16>(v));
+            let va = sample(x_of(a), _mm256_srai_epi32::<16>(a));
+            let vb = sample(x_of(b), _mm256_srai_epi32::<16>(b));
+            // bit i iff a < b
+            *out = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(vb, va))) as u8;
         }
     }
     d
@@ -177,6 +291,71 @@ mod tests {
             };
             assert_eq!(describe(&img, x as u32, y as u32, &rp.tables[7]), clamped, "({x}, {y})");
         }
+    }
+
+    /// [`describe_fine`] by its definition: every sample through [`sample_fine`].
+    fn fine_naive(img: &Plane<u8>, x: u32, y: u32, sub: [i8; 2], t: &[FinePair]) -> Descriptor {
+        let (ox, oy) = (16 * x as i32 + sub[0] as i32, 16 * y as i32 + sub[1] as i32);
+        let mut d = [0u8; 32];
+        for (j, byte) in d.iter_mut().enumerate() {
+            for i in 0..8 {
+                let p = t[8 * j + i];
+                let a = sample_fine(img, ox + p[0] as i32, oy + p[1] as i32);
+                let b = sample_fine(img, ox + p[2] as i32, oy + p[3] as i32);
+                *byte |= ((a < b) as u8) << i;
+            }
+        }
+        d
+    }
+
+    #[test]
+    fn fine_vector_and_scalar_reads_agree_everywhere() {
+        // every pixel of a random image (the gathers inside, clamped reads
+        // near the borders), every 1/16 offset in turn, several bins
+        let (w, h) = (67u32, 59u32);
+        let img =
+            Plane::from_vec(w, h, (0..w * h).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect()).unwrap();
+        let rp = RotatedPatterns::new(Pattern::orb(), 180);
+        for k in [0usize, 7, 44, 91, 135, 179] {
+            let t = &rp.fine[k];
+            for y in 0..h {
+                for x in 0..w {
+                    let n = (x * 7 + y * 3 + k as u32) % 225;
+                    let sub = [(n % 15) as i8 - 7, (n / 15) as i8 - 7];
+                    assert_eq!(
+                        describe_fine(&img, x, y, sub, t),
+                        fine_naive(&img, x, y, sub, t),
+                        "bin {k} at ({x}, {y}), {sub:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fine_at_whole_pixel_offsets_is_the_pixel_descriptor() {
+        // offsets that are whole pixels and no sub-pixel shift: every sample is
+        // 256 times a pixel, so the bits are those of `describe`
+        let img = Plane::from_vec(70, 64, (0..70 * 64u32).map(|i| (i.wrapping_mul(2246822519) >> 20) as u8).collect())
+            .unwrap();
+        let rp = RotatedPatterns::new(Pattern::orb(), 30);
+        for t in [&rp.tables[0], &rp.tables[11], &rp.tables[23]] {
+            let fine: Vec<FinePair> = t.iter().map(|p| p.map(|c| 16 * c as i16)).collect();
+            for (x, y) in [(35, 32), (22, 22), (0, 0), (69, 63), (40, 5), (47, 41)] {
+                assert_eq!(describe_fine(&img, x, y, [0, 0], &fine), describe(&img, x, y, t), "({x}, {y})");
+            }
+        }
+    }
+
+    #[test]
+    fn one_fine_sample_by_hand() {
+        // a 2x2 patch: (0,0)=10 (1,0)=50 (0,1)=90 (1,1)=130; at (5/16, 12/16):
+        // top 11*10 + 5*50 = 360, bottom 11*90 + 5*130 = 1640, 4*360 + 12*1640
+        let img = Plane::from_vec(2, 2, vec![10, 50, 90, 130]).unwrap();
+        assert_eq!(sample_fine(&img, 5, 12), 4 * 360 + 12 * 1640);
+        // negative positions floor and clamp: (-1/16, 0) is 15/16 of pixel -1 (= 0) and 1/16 of pixel 0
+        assert_eq!(sample_fine(&img, -1, 0), 256 * 10);
+        assert_eq!(sample_fine(&img, 31, 31), 256 * 130);
     }
 
     #[test]

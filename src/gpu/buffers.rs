@@ -456,12 +456,17 @@ impl Buffers {
 
 /// The rotated pattern tables as i32 words: bin-major, 256 pairs of 4.
 /// With `orientation_bins = 0` the one unrotated table (the shader rotates).
+/// With bins, the tables in 1/16 px follow (`RotatedPatterns::fine`, read
+/// by orb.wgsl `fine_word`): bin-major, two words a pair.
 fn pattern_words(cfg: &Config) -> Vec<u32> {
-    let tables: Vec<Vec<[i8; 4]>> = if cfg.orientation_bins > 0 {
-        RotatedPatterns::new(Pattern::orb(), cfg.orientation_bins).tables
-    } else {
-        vec![Pattern::orb().pairs.clone()]
-    };
+    if cfg.orientation_bins == 0 {
+        return Pattern::orb().pairs.iter().map(|p| u32::from_le_bytes(p.map(|c| c as u8))).collect();
+    }
+    let r = RotatedPatterns::new(Pattern::orb(), cfg.orientation_bins);
     // one word per pair: x1, y1, x2, y2 as its bytes, lowest first
-    tables.iter().flatten().map(|p| u32::from_le_bytes(p.map(|c| c as u8))).collect()
+    let coarse = r.tables.iter().flatten().map(|p| u32::from_le_bytes(p.map(|c| c as u8)));
+    // two words per pair: x | y << 16 for each point, i16 each
+    let point = |x: i16, y: i16| (x as u16 as u32) | (y as u16 as u32) << 16;
+    let fine = r.fine.iter().flatten().flat_map(|p| [point(p[0], p[1]), point(p[2], p[3])]);
+    coarse.chain(fine).collect()
 }

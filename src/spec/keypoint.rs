@@ -86,6 +86,28 @@ pub fn level_pixel(p: f32, s: f64) -> f64 {
     (p as f64 / s + 1.0 / 32.0).floor()
 }
 
+/// The 1/[`SUBPIXEL`]-px offset of position `p` (input pixels, level scale `s`)
+/// from its level pixel `pixel` ([`level_pixel`]) under the L-FAST centre:
+/// the inverse of [`keypoint_at_sub`], `q = round(16 (p / s - pixel - 1/2))`
+/// when `|q| <=` [`SUBPIXEL_MAX`] (lfast's own positions), else 0 (OpenCV's
+/// `p = pixel * s`, on the pixel's corner, whose `q` would be -8).
+///
+/// ```
+/// use lfast::spec::{keypoint_at_sub, level_pixel, level_subpixel, LFAST_CENTRE};
+/// let s = 1.2f64.powi(3);
+/// let kp = keypoint_at_sub(3, [40, 17], [-5, 7], s, LFAST_CENTRE, 0.0, 1.0);
+/// let (x, y) = (level_pixel(kp.pt.x, s), level_pixel(kp.pt.y, s));
+/// assert_eq!((x, y), (40.0, 17.0));
+/// assert_eq!([level_subpixel(kp.pt.x, s, x), level_subpixel(kp.pt.y, s, y)], [-5, 7]);
+/// // an OpenCV keypoint (pt = pixel * s) has no offset
+/// let cv = (40.0 * s) as f32;
+/// assert_eq!(level_subpixel(cv, s, level_pixel(cv, s)), 0);
+/// ```
+pub fn level_subpixel(p: f32, s: f64, pixel: f64) -> i8 {
+    let q = (SUBPIXEL as f64 * (p as f64 / s - pixel - LFAST_CENTRE)).round();
+    if q.abs() <= SUBPIXEL_MAX as f64 { q as i8 } else { 0 }
+}
+
 /// The level pixel (x, y) of a keypoint under `cfg`'s scale (by [`level_pixel`]),
 /// for keypoints inside their level.
 pub fn keypoint_level_pixel(cfg: &Config, k: &KeyPoint) -> (u32, u32) {

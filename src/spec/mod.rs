@@ -24,7 +24,7 @@ pub mod windows;
 
 pub use keypoint::{
     LFAST_CENTRE, OPENCV_CENTRE, SUBPIXEL, SUBPIXEL_MAX, keypoint_at, keypoint_at_sub, keypoint_level_pixel,
-    level_pixel,
+    level_pixel, level_subpixel,
 };
 pub use mask::{level_mask, mask_radius};
 pub use quotas::level_quotas;

@@ -2,6 +2,7 @@
 //! copied to data/) and its tables pre-rotated to the angle bins. The CPU
 //! (src/cpu/orb.rs) and the GPU (src/gpu/buffers.rs uploads the tables) share it.
 
+use super::SUBPIXEL;
 use super::angle::AngleBins;
 use crate::error::{Error, Result};
 use std::sync::OnceLock;
@@ -11,6 +12,10 @@ pub const PATTERN_TEXT: &str = include_str!("../../data/orb_bit_pattern_31.txt")
 
 /// One test: bit = `I(a) < I(b)` with `a = (x1, y1)`, `b = (x2, y2)` offsets.
 pub type Pair = [i8; 4];
+
+/// One test with its offsets in 1/[`SUBPIXEL`] pixel (`[x1, y1, x2, y2]`):
+/// the rotated pattern of the sub-pixel descriptor (docs/algorithm.md).
+pub type FinePair = [i16; 4];
 
 /// The 256 tests of rBRIEF.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -66,6 +71,25 @@ impl Pattern {
         })
     }
 
+    /// The pattern rotated by `angle` radians in 1/[`SUBPIXEL`] pixel steps:
+    /// `16 (x cos - y sin)` and `16 (x sin + y cos)` rounded half to even, as
+    /// `[x1, y1, x2, y2]` (the sub-pixel descriptor, [`FinePair`]).
+    pub fn rotated_fine(&self, angle: f64) -> Vec<FinePair> {
+        let (s, c) = angle.sin_cos();
+        let step = SUBPIXEL as f64;
+        let rot = |x: i8, y: i8| {
+            let (x, y) = (x as f64, y as f64);
+            ((step * (x * c - y * s)).round_ties_even() as i16, (step * (x * s + y * c)).round_ties_even() as i16)
+        };
+        self.pairs
+            .iter()
+            .map(|p| {
+                let ((ax, ay), (bx, by)) = (rot(p[0], p[1]), rot(p[2], p[3]));
+                [ax, ay, bx, by]
+            })
+            .collect()
+    }
+
     /// The pairs with `f` applied to both points of each.
     pub(crate) fn map_points(&self, f: impl Fn(i8, i8) -> (i8, i8)) -> Vec<Pair> {
         self.pairs
@@ -96,6 +120,9 @@ pub struct RotatedPatterns {
     pub bins: AngleBins,
     /// `tables[b]` is the pattern rotated to bin b's centre angle.
     pub tables: Vec<Vec<Pair>>,
+    /// `fine[b]`: the same rotation in 1/16 pixel, for keypoints with a
+    /// sub-pixel position ([`Pattern::rotated_fine`]).
+    pub fine: Vec<Vec<FinePair>>,
 }
 
 impl RotatedPatterns {
@@ -103,7 +130,8 @@ impl RotatedPatterns {
     pub fn new(pattern: &Pattern, bins: u32) -> Self {
         let bins = AngleBins::new(bins);
         let tables = (0..bins.len() as u32).map(|b| pattern.rotated(bins.centre(b))).collect();
-        Self { bins, tables }
+        let fine = (0..bins.len() as u32).map(|b| pattern.rotated_fine(bins.centre(b))).collect();
+        Self { bins, tables, fine }
     }
 }
 
