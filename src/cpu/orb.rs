@@ -137,12 +137,19 @@ pub fn describe_fine(smoothed: &Plane<u8>, x: u32, y: u32, sub: [i8; 2], table: 
             return unsafe { describe_fine_avx2(&smoothed.data, smoothed.width as usize, [ox, oy], t) };
         }
     }
+    fine_by_samples(smoothed, [ox, oy], table)
+}
+
+/// [`describe_fine`] by its definition, every sample through [`sample_fine`]
+/// (`o`: the keypoint in 1/16 px): the border path, and the reference the
+/// AVX2 path is tested against.
+fn fine_by_samples(smoothed: &Plane<u8>, o: [i32; 2], table: &[FinePair]) -> Descriptor {
     let mut d = [0u8; 32];
     for (j, byte) in d.iter_mut().enumerate() {
         for i in 0..8 {
             let p = table[8 * j + i];
-            let a = sample_fine(smoothed, ox + p[0] as i32, oy + p[1] as i32);
-            let b = sample_fine(smoothed, ox + p[2] as i32, oy + p[3] as i32);
+            let a = sample_fine(smoothed, o[0] + p[0] as i32, o[1] + p[1] as i32);
+            let b = sample_fine(smoothed, o[0] + p[2] as i32, o[1] + p[3] as i32);
             *byte |= ((a < b) as u8) << i;
         }
     }
@@ -251,13 +258,17 @@ mod tests {
         assert_eq!(d[0] & 1, 1);
     }
 
+    /// A w x h image of hashed pixel values (every grey level, no structure).
+    fn hashed_image(w: u32, h: u32) -> Plane<u8> {
+        Plane::from_vec(w, h, (0..w * h).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect()).unwrap()
+    }
+
     #[test]
     fn vector_and_scalar_reads_agree_everywhere() {
         // every pixel of a random image, every rotated table: describe (the
         // gather path inside, the scalar paths near the borders) == clamped reads
         let (w, h) = (61u32, 53u32);
-        let img =
-            Plane::from_vec(w, h, (0..w * h).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect()).unwrap();
+        let img = hashed_image(w, h);
         let rp = RotatedPatterns::new(Pattern::orb(), 30);
         for (k, t) in rp.tables.iter().enumerate() {
             for y in (0..h).step_by(1 + k % 3) {
@@ -303,19 +314,9 @@ mod tests {
         }
     }
 
-    /// [`describe_fine`] by its definition: every sample through [`sample_fine`].
+    /// [`describe_fine`] through its reference, [`fine_by_samples`].
     fn fine_naive(img: &Plane<u8>, x: u32, y: u32, sub: [i8; 2], t: &[FinePair]) -> Descriptor {
-        let (ox, oy) = (16 * x as i32 + sub[0] as i32, 16 * y as i32 + sub[1] as i32);
-        let mut d = [0u8; 32];
-        for (j, byte) in d.iter_mut().enumerate() {
-            for i in 0..8 {
-                let p = t[8 * j + i];
-                let a = sample_fine(img, ox + p[0] as i32, oy + p[1] as i32);
-                let b = sample_fine(img, ox + p[2] as i32, oy + p[3] as i32);
-                *byte |= ((a < b) as u8) << i;
-            }
-        }
-        d
+        fine_by_samples(img, [16 * x as i32 + sub[0] as i32, 16 * y as i32 + sub[1] as i32], t)
     }
 
     #[test]
@@ -323,8 +324,7 @@ mod tests {
         // every pixel of a random image (the gathers inside, clamped reads
         // near the borders), every 1/16 offset in turn, several bins
         let (w, h) = (67u32, 59u32);
-        let img =
-            Plane::from_vec(w, h, (0..w * h).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect()).unwrap();
+        let img = hashed_image(w, h);
         let rp = RotatedPatterns::new(Pattern::orb(), 180);
         for k in [0usize, 7, 44, 91, 135, 179] {
             let t = &rp.fine[k];
