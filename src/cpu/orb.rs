@@ -2,7 +2,6 @@
 //! pattern of data/orb_bit_pattern_31.txt (embedded at compile time).
 //! Mirrors shaders/orb.wgsl.
 
-use super::simd::dispatch;
 use crate::image::Plane;
 use crate::keypoint::Descriptor;
 use crate::spec::SUBPIXEL;
@@ -122,7 +121,10 @@ pub fn describe_fine(smoothed: &Plane<u8>, x: u32, y: u32, sub: [i8; 2], table: 
     let (ox, oy) = (x as i32 * SUBPIXEL + sub[0] as i32, y as i32 * SUBPIXEL + sub[1] as i32);
     #[cfg(target_arch = "x86_64")]
     if let Some(t) = table.first_chunk::<256>() {
-        let reach = fine_reach(t) as i32;
+        // (a plain fold: vectorised through dispatch! LLVM unrolled it into a
+        // block that valgrind's translator cannot hold, and the C test runs
+        // under memcheck)
+        let reach = t.as_flattened().iter().fold(0, |m, &v| m.max(v.unsigned_abs())) as i32;
         let (w, h) = (smoothed.width as i32, smoothed.height as i32);
         // the gathers read 4 bytes from (ix, iy) and (ix, iy + 1): columns
         // up to ix + 3 (so ix + 1 is inside too), rows up to iy + 1
@@ -154,15 +156,6 @@ fn fine_by_samples(smoothed: &Plane<u8>, o: [i32; 2], table: &[FinePair]) -> Des
         }
     }
     d
-}
-
-dispatch! {
-    /// The largest offset of a fine table, in 1/16 px (vectorised: it is
-    /// checked for every keypoint before the gathers).
-    #[cfg(target_arch = "x86_64")]
-    fn fine_reach(t: &[FinePair; 256]) -> u16 {
-        t.as_flattened().iter().fold(0, |m, &v| m.max(v.unsigned_abs()))
-    }
 }
 
 /// [`describe_fine`] with AVX2, 8 pairs at a time: the pairs' two points as
