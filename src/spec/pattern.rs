@@ -64,19 +64,22 @@ impl Pattern {
     /// The pattern rotated by `angle` radians, offsets rounded half to even
     /// (OpenCV's cvRound): `x' = x cos - y sin`, `y' = x sin + y cos`.
     pub fn rotated(&self, angle: f64) -> Vec<Pair> {
-        let (s, c) = angle.sin_cos();
-        self.map_points(|x, y| {
-            let (x, y) = (x as f64, y as f64);
-            ((x * c - y * s).round_ties_even() as i8, (x * s + y * c).round_ties_even() as i8)
-        })
+        // offsets within 15 * sqrt(2) of the centre: they fit i8
+        self.rotated_in_steps(angle, 1.0).into_iter().map(|p| p.map(|c| c as i8)).collect()
     }
 
     /// The pattern rotated by `angle` radians in 1/[`SUBPIXEL`] pixel steps:
     /// `16 (x cos - y sin)` and `16 (x sin + y cos)` rounded half to even, as
     /// `[x1, y1, x2, y2]` (the sub-pixel descriptor, [`FinePair`]).
     pub fn rotated_fine(&self, angle: f64) -> Vec<FinePair> {
+        self.rotated_in_steps(angle, SUBPIXEL as f64)
+    }
+
+    /// The pattern rotated by `angle` radians, in units of `1 / step` pixel:
+    /// `step (x cos - y sin)`, `step (x sin + y cos)`, rounded half to even
+    /// (a `step` of 1 multiplies exactly, so [`Self::rotated`] is cvRound's).
+    fn rotated_in_steps(&self, angle: f64, step: f64) -> Vec<FinePair> {
         let (s, c) = angle.sin_cos();
-        let step = SUBPIXEL as f64;
         let rot = |x: i8, y: i8| {
             let (x, y) = (x as f64, y as f64);
             ((step * (x * c - y * s)).round_ties_even() as i16, (step * (x * s + y * c)).round_ties_even() as i16)
