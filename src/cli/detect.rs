@@ -96,6 +96,7 @@ fn front_end(kind: FrontEnd, cfg: Config, fast_threshold: i32, common: &Common) 
 enum Stage {
     Skip,
     Failed(String),
+    Problem(inputs::Problem),
     Decoded(Plane<u8>),
     Detected { width: u32, height: u32, kps: Vec<KeyPoint>, desc: Vec<Descriptor>, img: Option<Plane<u8>> },
 }
@@ -189,7 +190,7 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
 
     report::log_warnings(a.common.quiet);
     report::catch_interrupts();
-    let mut rep = Reporter::new(jobs.len() as u64, a.common.quiet);
+    let mut rep = Reporter::new(jobs.iter().filter(|j| j.input.is_file()).count() as u64, a.common.quiet);
     let threads = pool.current_num_threads().max(1);
     let decoders = (threads / 2).clamp(1, 4);
     let next = AtomicUsize::new(0);
@@ -211,7 +212,7 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(job) = jobs.get(i) else { break };
                     let st = if let Some(p) = &job.input.problem {
-                        Stage::Failed(p.clone())
+                        Stage::Problem(p.clone())
                     } else if skip_existing && job.outputs.iter().all(|p| p.is_file()) {
                         Stage::Skip
                     } else {
@@ -258,6 +259,7 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
             match &st {
                 Stage::Skip => rep.skipped(|| format!("{}: skipped (outputs exist)", job.input.path.display())),
                 Stage::Failed(reason) => rep.failed(&job.input.path, reason),
+                Stage::Problem(p) => rep.problem(&job.input.path, p),
                 Stage::Detected { kps, .. } => match write_all(job, &formats, &st, write) {
                     Ok(()) => rep.done(kps.len() as u64, || {
                         format!("{}: {} keypoints -> {}", job.input.path.display(), kps.len(), job.outputs[0].display())

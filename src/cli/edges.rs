@@ -1,7 +1,7 @@
 //! `lfast edges`: the improved Canny edge map of many inputs, with `--debug`
 //! intermediates.
 
-use super::inputs::{self, Input};
+use super::inputs::{self, Input, Problem};
 use super::report::{self, Reporter};
 use super::{CliError, Common};
 use crate::cpu::classify;
@@ -139,7 +139,7 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
     };
     report::log_warnings(a.common.quiet);
     report::catch_interrupts();
-    let mut rep = Reporter::new(jobs.len() as u64, a.common.quiet);
+    let mut rep = Reporter::new(jobs.iter().filter(|(i, _)| i.is_file()).count() as u64, a.common.quiet);
     let threads = pool.current_num_threads();
     // set when the disk is full: no file is started after it
     let stop = AtomicBool::new(false);
@@ -154,7 +154,7 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
                     }
                     let r = match &input.problem {
                         Some(p) => Err(p.clone()),
-                        None => process(det, input, path, debug).map_err(|e| report::reason(&e)),
+                        None => process(det, input, path, debug).map_err(|e| Problem::File(report::reason(&e))),
                     };
                     let _ = tx.send((i, r));
                 })
@@ -167,7 +167,7 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
             }
             let (input, path) = &jobs[i];
             match r {
-                Err(reason) => rep.failed(&input.path, &reason),
+                Err(p) => rep.problem(&input.path, &p),
                 Ok((files, n)) => match write(&files) {
                     Ok(()) => {
                         rep.done(n, || format!("{}: {n} edge pixels -> {}", input.path.display(), path.display()))

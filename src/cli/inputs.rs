@@ -19,9 +19,34 @@ pub struct Input {
     /// the file stem, or for a file found in a directory its path below that
     /// directory without extension.
     pub rel: PathBuf,
-    /// Set when the input cannot be processed for a reason known up front
-    /// (its output name collides with an earlier input's).
-    pub problem: Option<String>,
+    /// Set when the entry cannot be processed for a reason known up front.
+    pub problem: Option<Problem>,
+}
+
+impl Input {
+    /// Whether this entry is a file (to process, or failed as a file), not
+    /// an error of the directory walk.
+    pub fn is_file(&self) -> bool {
+        !matches!(self.problem, Some(Problem::Walk { .. }))
+    }
+}
+
+/// Why an entry cannot be processed, known before any work starts.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Problem {
+    /// Not a file: the directory walk could not follow or read this entry.
+    /// `kind` names the error in the batch summary (`symbolic link loop`,
+    /// `unreadable directory`), `reason` on its error line. The summary counts
+    /// these apart from files.
+    Walk {
+        /// A short name of the error, for the summary.
+        kind: &'static str,
+        /// The full reason, for the error line.
+        reason: String,
+    },
+    /// A file that cannot be processed: its output name collides with an
+    /// earlier input's, or it is a dangling link named like an image.
+    File(String),
 }
 
 /// `K/N`: this run does shard K (0-based) of N.
@@ -68,10 +93,11 @@ fn has_glob_chars(s: &str) -> bool {
 /// Walks `root` recursively for images in file-name order, following
 /// symbolic links, skipping hidden entries and `skip` (the output directory,
 /// so outputs are never taken as inputs). A link back to one of its own
-/// ancestors (a loop) is not followed but becomes an input with a problem
-/// naming it and the directory it leads back to, so that the batch reports
-/// it on one error line and goes on; an unreadable directory or a broken link
-/// named like an image likewise.
+/// ancestors (a loop) is not followed but becomes an entry with a
+/// [`Problem::Walk`] naming it and the directory it leads back to, so that the
+/// batch reports it on one error line and goes on; an unreadable directory
+/// likewise. A broken link named like an image is a file that fails
+/// ([`Problem::File`]).
 fn walk(root: &Path, skip: Option<&Path>, out: &mut Vec<Input>) {
     let skipped = |e: &walkdir::DirEntry| {
         e.depth() > 0
@@ -89,13 +115,20 @@ fn walk(root: &Path, skip: Option<&Path>, out: &mut Vec<Input>) {
             Err(err) => {
                 let path = err.path().unwrap_or(root).to_path_buf();
                 let problem = match (err.loop_ancestor(), err.io_error()) {
-                    (Some(ancestor), _) => {
-                        format!("symbolic link loop (leads back to {}), not followed", ancestor.display())
-                    }
+                    (Some(ancestor), _) => Problem::Walk {
+                        kind: "symbolic link loop",
+                        reason: format!("symbolic link loop (leads back to {}), not followed", ancestor.display()),
+                    },
                     // a dangling link is an input only when named like one
-                    _ if path.is_symlink() && !path.exists() && !is_image(&path) => continue,
-                    (None, Some(io)) => io.to_string(),
-                    (None, None) => err.to_string(),
+                    _ if path.is_symlink() && !path.exists() => match is_image(&path) {
+                        true => Problem::File(err.io_error().map_or_else(|| err.to_string(), |io| io.to_string())),
+                        false => continue,
+                    },
+                    (None, Some(io)) if path.is_dir() || io.kind() == std::io::ErrorKind::PermissionDenied => {
+                        Problem::Walk { kind: "unreadable directory", reason: io.to_string() }
+                    }
+                    (None, Some(io)) => Problem::Walk { kind: "walk error", reason: io.to_string() },
+                    (None, None) => Problem::Walk { kind: "walk error", reason: err.to_string() },
                 };
                 out.push(Input { rel: rel(&path), path, problem: Some(problem) });
             }
@@ -191,7 +224,11 @@ pub fn collect(args: &[PathBuf], list: Option<&Path>, out_dir: &Path) -> Result<
     for i in all.iter_mut().filter(|i| i.problem.is_none()) {
         match seen.get(&i.rel) {
             Some(first) => {
-                i.problem = Some(format!("output name {} is already used by {}", i.rel.display(), first.display()))
+                i.problem = Some(Problem::File(format!(
+                    "output name {} is already used by {}",
+                    i.rel.display(),
+                    first.display()
+                )))
             }
             None => {
                 seen.insert(i.rel.clone(), i.path.clone());

@@ -21,6 +21,9 @@ pub struct Counts {
     pub failed: u64,
     /// Keypoints (or edge pixels) over the files done.
     pub items: u64,
+    /// Entries the directory walk could not follow or read (a symbolic link
+    /// loop, an unreadable directory): errors, but not files.
+    pub walk_errors: u64,
 }
 
 /// Reports progress and errors; owned by the one thread that finishes files.
@@ -30,11 +33,13 @@ pub struct Reporter {
     start: Instant,
     /// The counts so far.
     pub counts: Counts,
+    /// The kinds of the walk errors, in the order first met, with their counts.
+    walk_kinds: Vec<(&'static str, u64)>,
 }
 
 impl Reporter {
     /// A bar on stderr when it is a terminal (and not `quiet`), else one line
-    /// per file on stdout (none when `quiet`).
+    /// per file on stdout (none when `quiet`). `total` counts files, not walk errors.
     pub fn new(total: u64, quiet: bool) -> Self {
         let tty = std::io::stderr().is_terminal();
         let bar = (!quiet && tty).then(|| {
@@ -46,7 +51,13 @@ impl Reporter {
             }
             b
         });
-        Reporter { bar, lines: !quiet && !tty, start: Instant::now(), counts: Counts::default() }
+        Reporter {
+            bar,
+            lines: !quiet && !tty,
+            start: Instant::now(),
+            counts: Counts::default(),
+            walk_kinds: Vec::new(),
+        }
     }
 
     /// A file done, with `items` keypoints/pixels and the line to print.
@@ -80,6 +91,25 @@ impl Reporter {
         }
     }
 
+    /// An entry the directory walk could not follow or read: one line on
+    /// stderr naming it and the reason; counted apart from files, by `kind`.
+    pub fn walk_error(&mut self, path: &Path, kind: &'static str, reason: &str) {
+        self.print_error(&format!("lfast: {}: {reason}", path.display()));
+        self.counts.walk_errors += 1;
+        match self.walk_kinds.iter_mut().find(|(k, _)| *k == kind) {
+            Some((_, n)) => *n += 1,
+            None => self.walk_kinds.push((kind, 1)),
+        }
+    }
+
+    /// An entry known up front to be unprocessable: a walk error or a failed file.
+    pub fn problem(&mut self, path: &Path, p: &super::inputs::Problem) {
+        match p {
+            super::inputs::Problem::Walk { kind, reason } => self.walk_error(path, kind, reason),
+            super::inputs::Problem::File(reason) => self.failed(path, reason),
+        }
+    }
+
     /// The batch cannot go on (a full disk): the file being written counts as
     /// failed, and `line` is printed on stderr as `lfast: LINE`.
     pub fn stopped(&mut self, line: &str) {
@@ -88,6 +118,10 @@ impl Reporter {
 
     fn error_line(&mut self, line: &str) {
         self.counts.failed += 1;
+        self.print_error(line);
+    }
+
+    fn print_error(&self, line: &str) {
         let line = one_line(line);
         match &self.bar {
             Some(b) => b.suspend(|| eprintln!("{line}")),
@@ -101,7 +135,9 @@ impl Reporter {
     }
 
     /// Clears the bar and prints the summary line on stdout; `what` names the
-    /// items counted ("keypoints"), `tail` is appended. Returns whether nothing failed.
+    /// items counted ("keypoints"), `tail` is appended. Files are counted as
+    /// files; walk errors follow them apart, by kind (`1 error (symbolic link
+    /// loop)`). Returns whether nothing failed and the walk met no error.
     pub fn finish(self, what: &str, tail: &str) -> bool {
         if let Some(b) = &self.bar {
             b.finish_and_clear();
@@ -110,15 +146,27 @@ impl Reporter {
         let c = self.counts;
         let fps = if secs > 0.0 { c.done as f64 / secs } else { 0.0 };
         println!(
-            "summary: done {}, skipped {}, failed {} of {} files; {} {what}; {secs:.2} s, {fps:.1} frames/s; {tail}",
+            "summary: done {}, skipped {}, failed {} of {} files;{} {} {what}; {secs:.2} s, {fps:.1} frames/s; {tail}",
             c.done,
             c.skipped,
             c.failed,
             c.done + c.skipped + c.failed,
+            walk_clause(c.walk_errors, &self.walk_kinds),
             c.items
         );
-        c.failed == 0
+        c.failed == 0 && c.walk_errors == 0
     }
+}
+
+/// ` N error(s) (KIND, KIND N);` for the summary, empty when there is none;
+/// a kind met more than once carries its count.
+fn walk_clause(n: u64, kinds: &[(&str, u64)]) -> String {
+    if n == 0 {
+        return String::new();
+    }
+    let kinds: Vec<String> =
+        kinds.iter().map(|&(k, m)| if m == 1 { k.to_string() } else { format!("{k} {m}") }).collect();
+    format!(" {n} error{} ({});", if n == 1 { "" } else { "s" }, kinds.join(", "))
 }
 
 /// Set by the first SIGINT or SIGTERM after [`catch_interrupts`].
@@ -290,6 +338,24 @@ mod tests {
         assert_eq!(one_line("a\r\tb\u{1b}[31m\u{7f}\u{85}\u{2028}"), r"a\r\tb\u{1b}[31m\u{7f}\u{85}\u{2028}");
         assert_eq!(one_line("été/ü ñ 画像.png"), "été/ü ñ 画像.png");
         assert!(!one_line(&(0..=0x10ffu32).filter_map(char::from_u32).collect::<String>()).contains(['\n', '\r']));
+    }
+
+    #[test]
+    fn walk_errors_are_counted_apart_from_files_by_kind() {
+        assert_eq!(walk_clause(0, &[]), "");
+        assert_eq!(walk_clause(1, &[("symbolic link loop", 1)]), " 1 error (symbolic link loop);");
+        assert_eq!(
+            walk_clause(3, &[("symbolic link loop", 2), ("unreadable directory", 1)]),
+            " 3 errors (symbolic link loop 2, unreadable directory);"
+        );
+        let mut r = Reporter::new(2, true);
+        r.problem(
+            Path::new("in/sub/loop"),
+            &super::super::inputs::Problem::Walk { kind: "symbolic link loop", reason: "x".into() },
+        );
+        r.problem(Path::new("in/a.png"), &super::super::inputs::Problem::File("taken".into()));
+        assert_eq!((r.counts.failed, r.counts.walk_errors), (1, 1));
+        assert!(!r.finish("keypoints", ""));
     }
 
     #[test]
