@@ -3,11 +3,13 @@
 //! gray conversion (SPEC 0 luma = OpenCV 4.x/5.x `cvtColor(COLOR_BGR2GRAY)`),
 //! in PNG and JPEG.
 //!
-//! The quiet run: src/main.rs points an unusable `XDG_RUNTIME_DIR` at a private
-//! temporary directory before any Vulkan instance exists, so Mesa's
+//! The quiet run: lfast's Vulkan instance leaves out the window-system surface
+//! extensions (src/gpu/context.rs, `compute_only_vulkan`), so Mesa's device
+//! selection layer does not connect to a Wayland display and libwayland's
 //! `error: XDG_RUNTIME_DIR is invalid or not set in the environment.` is not
-//! printed while the backend is chosen. python/tests/test_first_run.py checks
-//! the Python package the same way.
+//! printed while the backend is chosen; the environment is not changed.
+//! python/tests/test_first_run.py checks the Python package the same way, and
+//! .ci/run the C and C++ tests.
 
 mod common;
 
@@ -15,7 +17,7 @@ use common::{read_features, show, stderr, stdout};
 use std::path::Path;
 use std::process::{Command, Output};
 
-/// The binary as on a user's fresh headless machine: no XDG_RUNTIME_DIR, no
+/// The binary as on a user's fresh headless machine: no `XDG_RUNTIME_DIR`, no
 /// adapter or backend named (so `--backend auto` enumerates every adapter,
 /// lavapipe's included where it is installed).
 fn fresh(args: &[&dyn AsRef<std::ffi::OsStr>]) -> Output {

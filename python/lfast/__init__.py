@@ -40,32 +40,7 @@ from typing import Any, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-
-def _quiet_headless_vulkan() -> None:
-    """Give Mesa a private XDG_RUNTIME_DIR when none is usable.
-
-    On a headless machine Mesa's Vulkan drivers (lavapipe among them) print
-    ``error: XDG_RUNTIME_DIR is invalid or not set in the environment.`` while a
-    backend is chosen. When the variable is unset, empty or not an absolute path,
-    point it at a private temporary directory (mode 0700, removed at exit) before
-    any Vulkan instance exists, as the ``lfast`` binary does. The Rust library
-    itself leaves the environment alone.
-    """
-    value = os.environ.get("XDG_RUNTIME_DIR", "")
-    if os.name != "posix" or (os.path.isabs(value) and os.path.isdir(value)):
-        return
-    import atexit
-    import shutil
-    import tempfile
-
-    path = tempfile.mkdtemp(prefix="lfast-runtime-")
-    os.environ["XDG_RUNTIME_DIR"] = path
-    atexit.register(shutil.rmtree, path, True)
-
-
-_quiet_headless_vulkan()
-
-from . import _lfast  # noqa: E402  (after the environment is set)
+from . import _lfast
 from ._lfast import GpuError, default_config, imread, output_paths
 
 __all__ = [

@@ -108,10 +108,83 @@ pub struct GpuContext {
     lost: Arc<Mutex<Option<String>>>,
 }
 
+/// The instance lfast opens its own adapters from: the options' backends,
+/// with the Vulkan backend created for compute only where that matters (see
+/// [`compute_only_vulkan`]).
 fn instance(opts: &GpuOptions) -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
     desc.backends = opts.backends();
+    if let Some(inst) = compute_only_vulkan(&desc) {
+        return inst;
+    }
     wgpu::Instance::new(desc)
+}
+
+/// The window-system surface extensions that wgpu enables on a Unix
+/// desktop, which a compute-only instance leaves out.
+#[cfg(all(unix, not(target_vendor = "apple"), not(target_os = "android")))]
+const WINDOW_SYSTEM_EXTENSIONS: [&std::ffi::CStr; 3] =
+    [c"VK_KHR_wayland_surface", c"VK_KHR_xcb_surface", c"VK_KHR_xlib_surface"];
+
+/// A Vulkan-only instance without the window-system surface extensions, when
+/// Vulkan is the only backend asked for on a Unix desktop (Linux, the BSDs),
+/// else `None`.
+///
+/// Why: wgpu enables `VK_KHR_wayland_surface` (and xcb, xlib) on every
+/// instance. Mesa's implicit device-selection layer
+/// (`VK_LAYER_MESA_device_select`, installed with every Mesa Vulkan driver,
+/// lavapipe included) sees the Wayland extension and, while the adapters are
+/// enumerated, connects to the Wayland display to learn which GPU is the
+/// default; on a headless machine libwayland then prints `error:
+/// XDG_RUNTIME_DIR is invalid or not set in the environment.` on the host
+/// process's stderr. lfast never presents, so it creates no surface and needs
+/// none of these extensions; without them the layer does not connect, and the
+/// host's environment is left alone. wgpu-hal documents that its extension
+/// list should only grow, because it assumes an available extension is
+/// enabled; in wgpu-hal 30 these three are read only by
+/// `create_surface_from_{wayland,xcb,xlib}`, which check the instance's list
+/// and return an error. lfast creates no surface on this instance and hands it
+/// to nobody. `tests/gpu_quiet.rs` and the C and C++ tests check stderr with
+/// `XDG_RUNTIME_DIR` unset.
+///
+/// Other backend sets (GL, asked for with `WGPU_BACKEND`) take wgpu's
+/// instance unchanged, as does a Vulkan loader that fails here (wgpu then
+/// reports no Vulkan adapter, as it would).
+#[cfg(all(unix, not(target_vendor = "apple"), not(target_os = "android")))]
+fn compute_only_vulkan(desc: &wgpu::InstanceDescriptor) -> Option<wgpu::Instance> {
+    use wgpu::hal;
+    // the backends a Unix desktop build of wgpu has: Vulkan alone, or with GL
+    if desc.backends & (wgpu::Backends::VULKAN | wgpu::Backends::GL) != wgpu::Backends::VULKAN {
+        return None;
+    }
+    let hal_desc = hal::InstanceDescriptor {
+        name: "lfast",
+        flags: desc.flags,
+        memory_budget_thresholds: desc.memory_budget_thresholds,
+        backend_options: desc.backend_options.clone(),
+        telemetry: None,
+        display: None,
+    };
+    let leave_out_window_systems: Box<hal::vulkan::CreateInstanceCallback> = Box::new(|args| {
+        args.extensions.retain(|e| !WINDOW_SYSTEM_EXTENSIONS.contains(e));
+    });
+    // SAFETY: `hal_desc` is a valid descriptor without a display handle. The
+    // callback only removes the window-system surface extensions, which no
+    // code path of this instance uses (see above): lfast creates no surface.
+    let hal_instance = unsafe { hal::vulkan::Instance::init_with_callback(&hal_desc, Some(leave_out_window_systems)) };
+    match hal_instance {
+        // SAFETY: a Vulkan instance of this build's wgpu-hal, given to wgpu whole.
+        Ok(inst) => Some(unsafe { wgpu::Instance::from_hal::<hal::api::Vulkan>(inst) }),
+        Err(e) => {
+            log::debug!("compute-only Vulkan instance: {e}; using wgpu's own");
+            None
+        }
+    }
+}
+
+#[cfg(not(all(unix, not(target_vendor = "apple"), not(target_os = "android"))))]
+fn compute_only_vulkan(_: &wgpu::InstanceDescriptor) -> Option<wgpu::Instance> {
+    None
 }
 
 /// The first adapter whose name contains `name` (case-insensitive), else why not.
