@@ -6,8 +6,9 @@
 //! `.ci/run` does) each benchmark runs once, as a smoke test.
 //!
 //! Images: the bundled CC0 `tests/data/camera_cc0_v0.18plus.png` (512x512) and
-//! KITTI seq01 frame 20 (1241x376) from `../shared/data`; the KITTI group is
-//! skipped with a message when `../shared` is absent (a plain clone).
+//! KITTI seq01 frame 20 (1241x376) from the test data (`LFAST_TEST_DATA`, else
+//! `../shared/data`); the KITTI group is skipped with a message when it is
+//! absent (a plain clone), and fails under CI.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use lfast::baseline::canny::{CannyParams, canny};
@@ -19,19 +20,15 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
 
-const KITTI: &str = "../shared/data/kitti/seq01_000000-000050/image_0/000020.png";
-const CAMERA: &str = "tests/data/camera_cc0_v0.18plus.png";
+// the integration tests' helpers: the test data folder and the skip log
+#[path = "../tests/common/mod.rs"]
+mod common;
 
-fn load(rel: &str) -> Option<Plane<u8>> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
-    if !path.exists() {
-        eprintln!(
-            "skipping benchmarks on {}: file not found (../shared/data is absent in a plain clone)",
-            path.display()
-        );
-        return None;
-    }
-    Some(lfast::image::load_gray(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
+/// Under the test data folder (`LFAST_TEST_DATA`, else `../shared/data`).
+const KITTI: &str = "kitti/seq01_000000-000050/image_0/000020.png";
+
+fn load(path: &Path) -> Plane<u8> {
+    lfast::image::load_gray(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 fn bench_image(c: &mut Criterion, group: &str, img: &Plane<u8>) {
@@ -89,11 +86,12 @@ fn bench_variants(c: &mut Criterion, img: &Plane<u8>) {
 }
 
 fn cpu(c: &mut Criterion) {
-    if let Some(img) = load(KITTI) {
+    // skipped with a message (and logged) when the data is absent, as in a plain clone
+    if let Some(img) = common::shared(KITTI).map(|p| load(&p)) {
         bench_image(c, "kitti_seq01_000020", &img);
         bench_variants(c, &img);
     }
-    let img = load(CAMERA).expect("the bundled test image is part of the repository");
+    let img = load(&common::data("camera_cc0_v0.18plus.png"));
     bench_image(c, "camera", &img);
 }
 

@@ -26,8 +26,9 @@ if [[ $# -lt 1 ]]; then
 fi
 command -v valgrind >/dev/null || { echo "valgrind is not installed (apt-get install valgrind)" >&2; exit 2; }
 here=$(cd "$(dirname "$0")/.." && pwd)
-mapfile -t files < <(ls "$here"/../shared/data/kitti/seq01_000000-000050/image_0/*.png | head -n "$frames")
-[[ ${#files[@]} -gt 0 ]] || { echo "no KITTI frames under $here/../shared/data/kitti" >&2; exit 2; }
+data=${LFAST_TEST_DATA:-$here/../shared/data}
+mapfile -t files < <(ls "$data"/kitti/seq01_000000-000050/image_0/*.png | head -n "$frames")
+[[ ${#files[@]} -gt 0 ]] || { echo "no KITTI frames under $data/kitti (LFAST_TEST_DATA or ../shared/data)" >&2; exit 2; }
 
 count() { # BIN REPEATS -> instructions of the whole run
     RAYON_NUM_THREADS=1 valgrind --tool=cachegrind --cache-sim=no --cachegrind-out-file=/dev/null \

@@ -36,7 +36,7 @@ OpenCV's side loops over the same files, imread (grayscale) + ORB(2000)
 detectAndCompute, in this process (interpreter start-up not counted). Both
 give ms per frame. --no-cli skips the row.
 
-Default frames: the 51 KITTI frames of ../shared/data/kitti/seq01_000000-000050/image_0.
+Default frames: the 51 KITTI frames of $LFAST_TEST_DATA (default ../shared/data)/kitti/seq01_000000-000050/image_0.
 Requires: pip install opencv-python-headless numpy.
 
 Usage: python3 scripts/bench_opencv.py [--repeats R] [--bin PATH [--commit REV]] [--json-out FILE] [FILES...]
@@ -56,9 +56,10 @@ import time
 from pathlib import Path
 
 import cv2
+from lfast_data import data_dir
 
 ROOT = Path(__file__).resolve().parent.parent
-KITTI_DIR = ROOT.parent / "shared" / "data" / "kitti" / "seq01_000000-000050" / "image_0"
+KITTI_DIR = data_dir() / "kitti" / "seq01_000000-000050" / "image_0"
 
 # (our method, OpenCV method, label, target ratio or None)
 PAIRS = [
@@ -225,7 +226,7 @@ def main():
 
     files = args.files or sorted(KITTI_DIR.glob("*.png"))
     if not files:
-        raise SystemExit(f"no frames given and none found in {KITTI_DIR} (../shared/data absent?)")
+        raise SystemExit(f"no frames given and none found in {KITTI_DIR} (LFAST_TEST_DATA or ../shared/data absent?)")
 
     load_before = os.getloadavg()
     ours = run_ours(files, args.repeats, args.bin)

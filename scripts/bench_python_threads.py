@@ -25,8 +25,9 @@ os.environ["RAYON_NUM_THREADS"] = "1"
 import numpy as np  # noqa: E402
 
 import lfast  # noqa: E402
+from lfast_data import data_dir  # noqa: E402
 
-KITTI = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "kitti" / "seq01_000000-000050" / "image_0"
+KITTI = data_dir() / "kitti" / "seq01_000000-000050" / "image_0"
 
 
 def main() -> None:

@@ -17,6 +17,7 @@ import cv2
 import numpy as np
 
 import lfast
+from lfast_data import data_dir
 
 
 def key(k):
@@ -56,8 +57,8 @@ def run(paths):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--kitti", default="../shared/data/kitti/seq01_000000-000050/image_0")
-    ap.add_argument("--standard", default="../shared/data/standard/*.png")
+    ap.add_argument("--kitti", default=str(data_dir() / "kitti" / "seq01_000000-000050" / "image_0"))
+    ap.add_argument("--standard", default=str(data_dir() / "standard" / "*.png"))
     ap.add_argument("--tests", default="tests/data/*.png")
     a = ap.parse_args()
     sets = {

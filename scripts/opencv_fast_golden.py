@@ -28,6 +28,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from lfast_data import data_dir, in_ci, note_skip
 
 THRESHOLD = 20
 NONMAX = True
@@ -35,7 +36,7 @@ NONMAX = True
 ROOT = Path(__file__).resolve().parent.parent
 OUT_DIR = ROOT / "tests" / "data" / "fast_opencv"
 CC0 = ["camera_cc0_v0.18plus", "coins", "text", "chessboard_GRAY"]
-KITTI_DIR = ROOT.parent / "shared" / "data" / "kitti" / "seq01_000000-000050" / "image_0"
+KITTI_DIR = data_dir() / "kitti" / "seq01_000000-000050" / "image_0"
 KITTI_FRAMES = ["000000", "000020"]
 
 
@@ -77,8 +78,11 @@ def main() -> int:
         path = KITTI_DIR / f"{frame}.png"
         if path.exists():
             inputs.append((f"kitti_seq01_{frame}", path))
+        elif in_ci():
+            print(f"error: {path} is missing, and CI must have the test data")
+            return 1
         else:
-            print(f"skipping {path}: not found (../shared/data absent)")
+            note_skip(f"opencv_fast_golden.py kitti_seq01_{frame}", path)
 
     OUT_DIR.mkdir(parents=True, exist_ok=True)
     failed = False

@@ -27,6 +27,7 @@ import tempfile
 
 import cv2
 import numpy as np
+from lfast_data import data_dir
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LFAST = os.path.join(ROOT, "target", "release", "lfast")
@@ -670,7 +671,7 @@ def section_vo(a):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--data", default=os.path.join(ROOT, "..", "shared", "data", "homography"))
+    ap.add_argument("--data", default=str(data_dir() / "homography"))
     ap.add_argument("--budget", type=int, default=500)
     ap.add_argument("--top-n", action="store_true",
                     help="variants section: the top N of the uncapped output by response instead of n_features = N")

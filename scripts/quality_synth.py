@@ -15,6 +15,7 @@ import os
 
 import cv2
 import numpy as np
+from lfast_data import data_dir
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 IMAGES = ["astronaut", "brick", "camera_cc0_v0.18plus", "coins", "motorcycle_left"]
@@ -41,7 +42,7 @@ STEPS = [  # angle, zoom, perspective, gamma, gain, noise sigma
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out")
-    ap.add_argument("--src", default=os.path.join(ROOT, "..", "shared", "data", "standard", "cc0"))
+    ap.add_argument("--src", default=str(data_dir() / "standard" / "cc0"))
     a = ap.parse_args()
     rng = np.random.default_rng(2026)
     for name in IMAGES:

@@ -11,16 +11,22 @@ import os
 import subprocess
 from pathlib import Path
 
+import sys
+
 import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(REPO / "scripts"))
+from lfast_data import data_dir, in_ci, note_skip  # noqa: E402  (scripts/ is on the path now)
+
 DATA = REPO / "tests" / "data"
-SHARED = REPO.parent / "shared" / "data"
+#: The real data: $LFAST_TEST_DATA, else ../shared/data (scripts/lfast_data.py).
+SHARED = data_dir()
 #: The bundled images (tests/data/regress holds deliberately broken files).
 IMAGES = sorted(DATA.glob("*.png"))
 KITTI = SHARED / "kitti" / "seq01_000000-000050" / "image_0"
-IN_CI = os.environ.get("CI", "").lower() in ("1", "true", "yes")
+IN_CI = in_ci()
 
 
 def lfast_bin() -> Path:
@@ -67,10 +73,11 @@ def cli_arrays(features: dict) -> tuple[np.ndarray, np.ndarray]:
 
 
 def kitti_frames(n: int) -> list[Path]:
-    """The first n KITTI frames of ../shared/data (CI provides them)."""
+    """The first n KITTI frames of the test data (CI provides them)."""
     frames = sorted(KITTI.glob("*.png"))[:n]
     if len(frames) < n:
         if IN_CI:
-            pytest.fail(f"{KITTI}: fewer than {n} frames (CI must provide ../shared/data)")
-        pytest.skip(f"{KITTI} not present")
+            pytest.fail(f"{KITTI}: fewer than {n} frames (CI must provide the test data)")
+        note_skip(f"pytest {os.environ.get('PYTEST_CURRENT_TEST', '').split(' ')[0]}", KITTI)
+        pytest.skip(f"{KITTI} not present (LFAST_TEST_DATA or ../shared/data)")
     return frames

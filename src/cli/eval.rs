@@ -17,7 +17,7 @@ Suites (docs/evaluation.md defines every metric):
   vo             visual odometry with each detector: trajectory error (lfast::vo)
   all            every suite, then the choice of the L-FAST defaults
 
-Data (default under ../shared/data): noise and continuity read a folder of images
+Data (default under $LFAST_TEST_DATA, else ../shared/data): noise and continuity read a folder of images
 (standard/); kitti and vo a KITTI folder (image_0/*.png, calib.txt, poses.txt) or a folder of
 sequences (kitti/); repeatability a scene folder (img1..imgN + H1to2p..H1toNp) or a folder of
 scenes (homography/). --data replaces that folder; for illumination and all it is a root
@@ -86,7 +86,7 @@ fn cli_err(e: EvalError) -> CliError {
 
 /// The options for `a`: default folders, with `--data` replacing the suite's.
 fn options(a: &EvalArgs) -> Options {
-    let root_default = PathBuf::from(eval::DEFAULT_DATA);
+    let root_default = eval::default_data();
     let rooted = matches!(a.suite, SuiteArg::All | SuiteArg::Illumination);
     let mut o = match (&a.data, rooted) {
         (Some(root), true) => {

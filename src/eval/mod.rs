@@ -142,8 +142,15 @@ pub struct Options {
     pub repeats: usize,
 }
 
-/// Default data root, relative to the working directory (the crate root).
+/// Default data root, relative to the working directory (the crate root),
+/// when `LFAST_TEST_DATA` is unset.
 pub const DEFAULT_DATA: &str = "../shared/data";
+
+/// The data root: `LFAST_TEST_DATA` when set (where
+/// `scripts/fetch_test_data.sh DIR` put the data), else [`DEFAULT_DATA`].
+pub fn default_data() -> std::path::PathBuf {
+    std::env::var_os("LFAST_TEST_DATA").filter(|v| !v.is_empty()).map_or_else(|| DEFAULT_DATA.into(), Into::into)
+}
 /// Default noise seed.
 pub const DEFAULT_SEED: u64 = 2022;
 

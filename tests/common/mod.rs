@@ -10,18 +10,45 @@ pub fn root() -> PathBuf {
     std::env::var_os("LFAST_ROOT").map_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")), PathBuf::from)
 }
 
-/// `../shared/data/<rel>` if it exists. When it does not: in CI (env CI set)
-/// the test fails, elsewhere it prints why and the caller skips.
+/// The real test data of ../shared/README.md (never committed): the folder
+/// named by `LFAST_TEST_DATA`, else `../shared/data` beside the project.
+/// `scripts/fetch_test_data.sh DIR` downloads it.
+pub fn data_dir() -> PathBuf {
+    std::env::var_os("LFAST_TEST_DATA")
+        .filter(|v| !v.is_empty())
+        .map_or_else(|| root().join("../shared/data"), PathBuf::from)
+}
+
+/// `<data_dir>/<rel>` if it exists. When it does not: in CI (env CI set)
+/// the test fails, elsewhere it says why, logs the skip (see [`note_skip`])
+/// and the caller skips.
 pub fn shared(rel: &str) -> Option<PathBuf> {
-    let p = root().join("../shared/data").join(rel);
+    let p = data_dir().join(rel);
     if p.exists() {
         return Some(p);
     }
     if std::env::var_os("CI").is_some() {
-        panic!("{} is missing, and CI must have ../shared", p.display());
+        panic!("{} is missing, and CI must have the test data (LFAST_TEST_DATA or ../shared/data)", p.display());
     }
-    eprintln!("skipping: {} not found (../shared is absent in a plain clone)", p.display());
+    note_skip(&p);
     None
+}
+
+/// Says on stderr that the running test skips for want of `missing`, and
+/// appends a line to the file named by `LFAST_SKIP_LOG` when set (`.ci/run`
+/// counts the skips there).
+pub fn note_skip(missing: &Path) {
+    let test = std::thread::current().name().unwrap_or("?").to_string();
+    eprintln!("skipping {test}: {} not found (LFAST_TEST_DATA or ../shared/data)", missing.display());
+    if let Some(log) = std::env::var_os("LFAST_SKIP_LOG") {
+        use std::io::Write;
+        let line = format!("{}: {test}: {} not found\n", env!("CARGO_CRATE_NAME"), missing.display());
+        // one write of one short line to a file opened for appending: lines of parallel tests do not mix
+        let f = std::fs::OpenOptions::new().create(true).append(true).open(&log);
+        if let Err(e) = f.and_then(|mut f| f.write_all(line.as_bytes())) {
+            eprintln!("warning: cannot log the skip to {}: {e}", std::path::Path::new(&log).display());
+        }
+    }
 }
 
 /// A file under tests/data.
@@ -31,9 +58,9 @@ pub fn data(rel: &str) -> PathBuf {
 
 /// The `lfast` binary with `args` and extra environment variables, not yet started.
 pub fn command(args: &[&dyn AsRef<std::ffi::OsStr>], env: &[(&str, &str)]) -> std::process::Command {
-    // No XDG_RUNTIME_DIR here: the binary sets a private one itself on a
-    // headless machine (src/main.rs, tests/first_run.rs), and the tests count
-    // stderr lines.
+    // No XDG_RUNTIME_DIR here: lfast's Vulkan instance does not need one on a
+    // headless machine (src/gpu/context.rs, tests/first_run.rs), and the tests
+    // count stderr lines.
     let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_lfast"));
     for a in args {
         c.arg(a);
