@@ -16,6 +16,7 @@ import tarfile
 import tempfile
 import urllib.parse
 import zipfile
+import zlib
 
 import catalog
 import pixels
@@ -24,7 +25,9 @@ import remote
 HERE = pathlib.Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 TMP_NAME = ".fetch-tmp"
-PROBLEMS = (remote.FetchError, catalog.CatalogError, pixels.ImageError, zipfile.BadZipFile, tarfile.TarError, OSError)
+# What a damaged or unexpected origin can raise (CatalogError, ImageError and a
+# calib.txt that is not ASCII are ValueErrors; a truncated archive, EOFError or zlib.error).
+PROBLEMS = (remote.FetchError, ValueError, zipfile.BadZipFile, tarfile.TarError, OSError, EOFError, zlib.error)
 
 
 def sha256(data):

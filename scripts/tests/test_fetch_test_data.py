@@ -232,6 +232,23 @@ def test_server_without_range_support_is_not_read_whole(setup):
     assert not (out / "kitti").exists()
 
 
+def test_damaged_archive_fails_cleanly(setup):
+    tmp, www, _ = setup
+    tgz = www / "vgg" / "scene.tar.gz"
+    tgz.write_bytes(tgz.read_bytes()[: tgz.stat().st_size // 2])
+    out = tmp / "out"
+    with Origin(www) as origin:
+        rc, log = run(tmp, str(out), "--only", "oxford", mirror=origin.url)
+        assert origin.paths() == ["/vgg/scene.tar.gz"]  # tried once, not once a file
+    assert rc == 1 and "Traceback" not in log, log
+    assert [line.split(":")[0] for line in log.splitlines() if line.startswith("FAILED")] == [
+        "FAILED homography/scene/H1to2p",
+        "FAILED homography/scene/img1.png",
+        "FAILED homography/scene/img2.png",
+    ]
+    assert not (out / "homography").exists()
+
+
 def test_archives_folder_replaces_the_network(setup):
     tmp, www, rows = setup
     out = tmp / "out"
