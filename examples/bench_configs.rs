@@ -14,6 +14,12 @@
 //! rounds of the time per frame (ms), the mean keypoints per frame, and the
 //! minimum as a ratio of the first configuration's. docs/quality.md (cost)
 //! runs it with `RAYON_NUM_THREADS=1`.
+//!
+//! On Linux it also reports the CPU time of the whole process per frame
+//! (`cpu_min_ms`, `cpu_median_ms`, `cpu_min_vs_first`: the on-CPU time of all
+//! its threads, from `/proc/self/task/*/schedstat`, in nanoseconds). On a
+//! loaded machine that time moves much less than the wall clock, since time
+//! spent waiting for a core is not counted.
 
 use lfast::cpu::CpuDetector;
 use lfast::{Config, Plane};
@@ -51,10 +57,11 @@ fn main() -> lfast::Result<()> {
     }
     let frames: Vec<Plane<u8>> = files.iter().map(lfast::image::load_gray).collect::<lfast::Result<_>>()?;
     let mut times = vec![Vec::with_capacity(rounds); configs.len()];
+    let mut cpu = vec![Vec::with_capacity(rounds); configs.len()];
     let mut points = vec![0usize; configs.len()];
     for round in 0..=rounds {
         for (c, (_, det)) in configs.iter().enumerate() {
-            let t = Instant::now();
+            let (t, c0) = (Instant::now(), cpu_ns());
             let mut n = 0;
             for f in &frames {
                 n += black_box(det.detect_and_compute(f.view(), None)?.0.len());
@@ -62,29 +69,52 @@ fn main() -> lfast::Result<()> {
             let ms = t.elapsed().as_secs_f64() * 1e3 / frames.len() as f64;
             if round > 0 {
                 times[c].push(ms);
+                if let (Some(a), Some(b)) = (c0, cpu_ns()) {
+                    cpu[c].push((b - a) as f64 / 1e6 / frames.len() as f64);
+                }
             }
             points[c] = n;
         }
     }
     let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-    let base = min(&times[0]);
+    let median = |v: &[f64]| {
+        let mut s = v.to_vec();
+        s.sort_by(f64::total_cmp);
+        s.get(s.len() / 2).copied()
+    };
+    let (base, cpu_base) = (min(&times[0]), min(&cpu[0]));
     let rows: Vec<_> = configs
         .iter()
-        .zip(&times)
+        .zip(times.iter().zip(&cpu))
         .zip(&points)
-        .map(|(((name, _), t), &n)| {
-            let mut s = t.clone();
-            s.sort_by(f64::total_cmp);
-            json!({
+        .map(|(((name, _), (t, c)), &n)| {
+            let mut row = json!({
                 "config": name,
                 "min_ms": min(t),
-                "median_ms": s[s.len() / 2],
+                "median_ms": median(t),
                 "mean_keypoints": n as f64 / frames.len() as f64,
                 "min_vs_first": min(t) / base,
-            })
+            });
+            if !c.is_empty() {
+                row["cpu_min_ms"] = json!(min(c));
+                row["cpu_median_ms"] = json!(median(c));
+                row["cpu_min_vs_first"] = json!(min(c) / cpu_base);
+            }
+            row
         })
         .collect();
     let out = json!({ "frames": frames.len(), "rounds": rounds, "configs": rows });
     println!("{}", serde_json::to_string_pretty(&out).expect("JSON"));
     Ok(())
+}
+
+/// On-CPU time of every thread of this process so far, in nanoseconds (the
+/// first field of `/proc/self/task/*/schedstat`); `None` where there is none.
+fn cpu_ns() -> Option<u64> {
+    let mut total = 0u64;
+    for t in std::fs::read_dir("/proc/self/task").ok()? {
+        let stat = std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok()?;
+        total += stat.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(total)
 }
