@@ -218,18 +218,83 @@ unsafe fn describe_fine_avx2(data: &[u8], w: usize, o: [i32; 2], table: &[FinePa
 /// the angle in degrees, offsets rounded half to even.
 pub fn describe_continuous(smoothed: &Plane<u8>, x: u32, y: u32, angle_deg: f32, pattern: &Pattern) -> Descriptor {
     let a = angle_deg * (std::f32::consts::PI / 180.0);
-    let (s, c) = (a.sin(), a.cos());
-    // f32, as OpenCV computes it per keypoint
-    let table = pattern.map_points(|px, py| {
+    describe(smoothed, x, y, &rotated_f32(pattern, a.cos(), a.sin()))
+}
+
+/// The pattern turned by the angle of cosine `c` and sine `s` as OpenCV's
+/// ORB turns it per keypoint: `cvRound(x c - y s)`, `cvRound(x s + y c)` in
+/// f32 (`descriptor = "opencv"` and `orientation_bins = 0`).
+pub fn rotated_f32(pattern: &Pattern, c: f32, s: f32) -> [Pair; 256] {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: AVX2 was detected just above
+        return unsafe { rotated_f32_avx2(pattern, c, s) };
+    }
+    rotated_f32_scalar(pattern, c, s)
+}
+
+/// [`rotated_f32`] one point at a time (the reference of the AVX2 path).
+pub fn rotated_f32_scalar(pattern: &Pattern, c: f32, s: f32) -> [Pair; 256] {
+    use crate::cpu::opencv::cv_round;
+    pattern.map_points(|px, py| {
         let (px, py) = (px as f32, py as f32);
-        ((px * c - py * s).round_ties_even() as i8, (px * s + py * c).round_ties_even() as i8)
-    });
-    describe(smoothed, x, y, &table)
+        (cv_round(px * c - py * s) as i8, cv_round(px * s + py * c) as i8)
+    })
+}
+
+/// [`rotated_f32`] four points (8 coordinates, `x y x y ...`) at a time:
+/// with `v = [x, y, ...]` and `w = [y, x, ...]` (swapped in pairs), `v c +
+/// w [-s, s, ...]` is `[x c - y s, y c + x s, ...]`, which equals the scalar
+/// `x c - y s` and `x s + y c` bit for bit (negation is exact, `a + (-b)` is
+/// `a - b`, addition commutes; a multiply and an add, never fused).
+/// `_mm256_cvtps_epi32` rounds half to even under the default rounding mode,
+/// as `cvRound` does.
+///
+/// # Safety
+/// The CPU has AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn rotated_f32_avx2(pattern: &Pattern, c: f32, s: f32) -> [Pair; 256] {
+    use std::arch::x86_64::*;
+    let coords = pattern.pairs.as_flattened();
+    let mut out = [[0i8; 4]; 256];
+    let flat = out.as_flattened_mut();
+    let (vc, vs) = (_mm256_set1_ps(c), _mm256_setr_ps(-s, s, -s, s, -s, s, -s, s));
+    let mut lanes = [0i32; 8];
+    for (src, dst) in coords.chunks_exact(8).zip(flat.chunks_exact_mut(8)) {
+        // SAFETY: `src` holds 8 bytes (chunks_exact), the load reads 8
+        let bytes = unsafe { _mm_loadl_epi64(src.as_ptr().cast()) };
+        let v = _mm256_cvtepi32_ps(_mm256_cvtepi8_epi32(bytes));
+        let w = _mm256_permute_ps::<0b10_11_00_01>(v);
+        let r = _mm256_add_ps(_mm256_mul_ps(v, vc), _mm256_mul_ps(w, vs));
+        // SAFETY: `lanes` holds 8 i32
+        unsafe { _mm256_storeu_si256(lanes.as_mut_ptr().cast(), _mm256_cvtps_epi32(r)) };
+        for (d, &l) in dst.iter_mut().zip(&lanes) {
+            *d = l as i8;
+        }
+    }
+    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rotated_f32_simd_equals_scalar() {
+        let p = Pattern::orb();
+        // every 1/8 degree, and the exact quarter turns
+        for k in 0..2880 {
+            let a = (k as f32 / 8.0) * (std::f32::consts::PI / 180.0);
+            let (c, s) = (a.cos(), a.sin());
+            assert_eq!(rotated_f32(p, c, s), rotated_f32_scalar(p, c, s), "{} degrees", k as f32 / 8.0);
+        }
+        for (c, s) in [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0), (0.5, 0.5)] {
+            assert_eq!(rotated_f32(p, c, s), rotated_f32_scalar(p, c, s), "cos {c} sin {s}");
+        }
+        // unrotated is the pattern itself
+        assert_eq!(rotated_f32(p, 1.0, 0.0).as_slice(), p.pairs.as_slice());
+    }
 
     #[test]
     fn one_bit_by_hand() {

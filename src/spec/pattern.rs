@@ -93,16 +93,18 @@ impl Pattern {
             .collect()
     }
 
-    /// The pairs with `f` applied to both points of each.
-    pub(crate) fn map_points(&self, f: impl Fn(i8, i8) -> (i8, i8)) -> Vec<Pair> {
-        self.pairs
-            .iter()
-            .map(|p| {
-                let (ax, ay) = f(p[0], p[1]);
-                let (bx, by) = f(p[2], p[3]);
-                [ax, ay, bx, by]
-            })
-            .collect()
+    /// The pairs with `f` applied to both points of each, as a table on the
+    /// stack (the per-keypoint rotation of `orientation_bins = 0` and of
+    /// `descriptor = "opencv"` allocates nothing). A pattern has 256 pairs
+    /// ([`parse`](Self::parse) refuses any other count).
+    pub(crate) fn map_points(&self, f: impl Fn(i8, i8) -> (i8, i8)) -> [Pair; 256] {
+        let mut t = [[0i8; 4]; 256];
+        for (o, p) in t.iter_mut().zip(&self.pairs) {
+            let (ax, ay) = f(p[0], p[1]);
+            let (bx, by) = f(p[2], p[3]);
+            *o = [ax, ay, bx, by];
+        }
+        t
     }
 
     /// Largest distance of any (rotated) sample from the keypoint, rounded up.

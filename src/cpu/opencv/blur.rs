@@ -108,17 +108,26 @@ pub fn blur_7x7_sigma2(img: &Plane<u8>) -> Plane<u8> {
     }
     // horizontal pass over rows -3..h+3 (reflect-101)
     let mut rows = vec![0f32; w * (h + 6)];
-    rows.par_chunks_mut(w).enumerate().for_each(|(yy, o)| {
-        let sy = reflect101(yy as i64 - 3, h as i64);
-        let src = &img.data[sy * w..(sy + 1) * w];
-        let line: Vec<f32> = (0..w + 6).map(|x| src[reflect101(x as i64 - 3, w as i64)] as f32).collect();
-        #[cfg(target_arch = "x86_64")]
-        if fma {
-            // SAFETY: FMA was detected just above
-            return unsafe { row_pass_fma(&line, &k, o) };
-        }
-        row_pass(&line, &k, o);
-    });
+    // one padded line per worker, reused from row to row
+    rows.par_chunks_mut(w).enumerate().for_each_init(
+        || vec![0f32; w + 6],
+        |line, (yy, o)| {
+            let sy = reflect101(yy as i64 - 3, h as i64);
+            let src = &img.data[sy * w..(sy + 1) * w];
+            for (l, &s) in line[3..w + 3].iter_mut().zip(src) {
+                *l = s as f32;
+            }
+            for x in (0..3).chain(w + 3..w + 6) {
+                line[x] = src[reflect101(x as i64 - 3, w as i64)] as f32;
+            }
+            #[cfg(target_arch = "x86_64")]
+            if fma {
+                // SAFETY: FMA was detected just above
+                return unsafe { row_pass_fma(line, &k, o) };
+            }
+            row_pass(line, &k, o);
+        },
+    );
     out.data.par_chunks_mut(w).enumerate().for_each(|(y, o)| {
         let r: [&[f32]; 7] = std::array::from_fn(|j| &rows[(y + j) * w..(y + j + 1) * w]);
         #[cfg(target_arch = "x86_64")]
