@@ -1,7 +1,7 @@
 //! Times the CPU pipeline over a list of image files and prints JSON to stdout.
 //!
 //! ```text
-//! cargo run --release --example bench_frames -- [--repeats R] [--only METHOD] FILE...
+//! cargo run --release --example bench_frames -- [--repeats R] [--only METHOD] [--keypoints KPS.json] FILE...
 //! ```
 //!
 //! `--only METHOD` runs one method (for profiling it alone with `perf record`).
@@ -20,7 +20,13 @@
 //!   level after level with a scratch per level as `detect` keeps them;
 //!   with `describe`, the floor analysis of `scripts/bench_opencv.py`;
 //! - `describe`: `CpuDetector::compute` on the frame's own L-FAST keypoints
-//!   (found before timing): pyramid, blur, orientation and rBRIEF.
+//!   (found before timing): pyramid, blur, orientation and rBRIEF;
+//! - `describe_opencv` (with `--keypoints`): `CpuDetector::compute` with
+//!   `descriptor = "opencv"` on the keypoints of `KPS.json`, one list per
+//!   file in the files' order, each keypoint `[x, y, size, angle, response,
+//!   octave]` (cv2 ORB's, as `scripts/bench_opencv.py` writes them): OpenCV's
+//!   pyramid, blur and rotated rBRIEF, against cv2's `compute()` on the same
+//!   keypoints; the mean count is of keypoints described.
 //!
 //! `scripts/bench_opencv.py` runs this and times OpenCV on the same frames.
 
@@ -34,7 +40,7 @@ use std::time::Instant;
 
 fn usage() -> ! {
     eprintln!(
-        "usage: bench_frames [--repeats R] [--only edges|lfast_detect_and_compute|orb_baseline|edges_pyramid|describe] FILE..."
+        "usage: bench_frames [--repeats R] [--only edges|lfast_detect_and_compute|orb_baseline|edges_pyramid|describe|describe_opencv] [--keypoints KPS.json] FILE..."
     );
     std::process::exit(2);
 }
@@ -79,8 +85,10 @@ fn main() -> lfast::Result<()> {
     let mut repeats = 5usize;
     let mut files = Vec::new();
     let mut only: Option<String> = None;
+    let mut keypoints: Option<String> = None;
     while let Some(a) = args.next() {
         match a.as_str() {
+            "--keypoints" => keypoints = Some(args.next().unwrap_or_else(|| usage())),
             "--repeats" | "-r" => {
                 repeats = args.next().and_then(|v| v.parse().ok()).filter(|&r| r > 0).unwrap_or_else(|| usage());
             }
@@ -97,7 +105,8 @@ fn main() -> lfast::Result<()> {
     let det = CpuDetector::new(Config::default())?;
     let orb = OrbDetector::new(OrbParams { n_features: 2000, ..OrbParams::default() })?;
 
-    const METHODS: [&str; 5] = ["edges", "lfast_detect_and_compute", "orb_baseline", "edges_pyramid", "describe"];
+    const METHODS: [&str; 6] =
+        ["edges", "lfast_detect_and_compute", "orb_baseline", "edges_pyramid", "describe", "describe_opencv"];
     if only.as_deref().is_some_and(|m| !METHODS.contains(&m)) {
         usage();
     }
@@ -158,6 +167,18 @@ fn main() -> lfast::Result<()> {
         });
         methods.insert(METHODS[4].into(), summary(&t, n, "mean_keypoints"));
     }
+    if let Some(path) = keypoints.as_deref().filter(|_| run(METHODS[5])) {
+        let kps = read_keypoints(path, frames.len())?;
+        let ocv = CpuDetector::new(Config {
+            descriptor: lfast::config::DescriptorKind::Opencv,
+            orientation_bins: 0,
+            ..Config::default()
+        })?;
+        let (t, n) = time_indexed(frames.len(), repeats, |i| {
+            ocv.compute(frames[i].view(), &kps[i]).expect("valid keypoints").len()
+        });
+        methods.insert(METHODS[5].into(), summary(&t, n, "mean_keypoints"));
+    }
 
     let mut sizes: Vec<[u32; 2]> = frames.iter().map(|f| [f.width, f.height]).collect();
     sizes.sort_unstable();
@@ -171,4 +192,27 @@ fn main() -> lfast::Result<()> {
     });
     println!("{}", serde_json::to_string_pretty(&out).expect("JSON"));
     Ok(())
+}
+
+/// The keypoints of `--keypoints`: per frame, `[x, y, size, angle, response, octave]` rows.
+fn read_keypoints(path: &str, frames: usize) -> lfast::Result<Vec<Vec<lfast::KeyPoint>>> {
+    let bad = |reason: String| lfast::Error::Io { path: path.into(), source: std::io::Error::other(reason) };
+    let text = std::fs::read_to_string(path).map_err(|e| lfast::Error::Io { path: path.into(), source: e })?;
+    let rows: Vec<Vec<[f64; 6]>> = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    if rows.len() != frames {
+        return Err(bad(format!("{} keypoint lists for {frames} files", rows.len())));
+    }
+    Ok(rows
+        .iter()
+        .map(|f| {
+            f.iter()
+                .map(|&[x, y, size, angle, response, octave]| lfast::KeyPoint {
+                    angle: angle as f32,
+                    response: response as f32,
+                    octave: octave as i32,
+                    ..lfast::KeyPoint::new(x as f32, y as f32, size as f32)
+                })
+                .collect()
+        })
+        .collect())
 }

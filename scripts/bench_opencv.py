@@ -19,6 +19,10 @@ the target applies to the median ratio):
   write JSON) / a Python loop of cv2.imread + ORB(2000).detectAndCompute
                                                        target <= 0.5
 
+descriptor="opencv" (lfast::ORBextractor's descriptor: OpenCV's pyramid, blur
+and rotated rBRIEF) on cv2 ORB(2000)'s own keypoints, those its compute() keeps,
+/ cv2 ORB(2000).compute on the same keypoints     target <= 1.0
+
 Two more pairs, without a target, split L-FAST+ORB into the parts OpenCV also
 has, for the floor analysis in BENCHMARKS.md:
   improved Canny on each of the 8 pyramid levels / cv2.Canny(100, 200) on an
@@ -69,6 +73,7 @@ PAIRS = [
     ("cli_detect_cpu", "cv2_imread_orb2000", "lfast detect DIR --backend cpu / cv2 imread+ORB loop", 0.5),
     ("edges_pyramid", "cv2_canny_pyramid", "improved Canny, 8 levels / cv2.Canny, 8 levels", None),
     ("describe", "cv2_orb_compute", "describe own keypoints / cv2 ORB compute", None),
+    ("describe_opencv", "cv2_orb_compute", 'descriptor="opencv" / cv2 compute, same keypoints', 1.0),
 ]
 
 # The default pyramid (Config: 8 levels, scale 1.2), sizes round(W / s^l) as SPEC 10.
@@ -108,12 +113,25 @@ def summary(per_frame, mean_count, count_name):
     }
 
 
-def run_ours(files, repeats, binary):
+def cv2_keypoints(files, path):
+    """cv2 ORB(2000)'s keypoints of each frame, those its compute() keeps, as
+    [x, y, size, angle, response, octave] rows in `path` (bench_frames
+    --keypoints): describe_opencv describes exactly what cv2_orb_compute does."""
+    orb = cv2.ORB_create(2000)
+    rows = []
+    for f in files:
+        img = cv2.imread(str(f), cv2.IMREAD_GRAYSCALE)
+        kps, _ = orb.compute(img, orb.detect(img, None))
+        rows.append([[k.pt[0], k.pt[1], k.size, k.angle, k.response, k.octave] for k in kps])
+    path.write_text(json.dumps(rows))
+
+
+def run_ours(files, repeats, binary, keypoints):
     if binary:
         cmd = [str(binary)]
     else:
         cmd = ["cargo", "run", "--quiet", "--release", "--example", "bench_frames", "--"]
-    cmd += ["--repeats", str(repeats)] + [str(f) for f in files]
+    cmd += ["--repeats", str(repeats), "--keypoints", str(keypoints)] + [str(f) for f in files]
     print("running:", " ".join(cmd[:8]), f"... ({len(files)} files)", file=sys.stderr)
     out = subprocess.run(cmd, cwd=ROOT, check=True, stdout=subprocess.PIPE, text=True).stdout
     return json.loads(out)
@@ -229,7 +247,10 @@ def main():
         raise SystemExit(f"no frames given and none found in {KITTI_DIR} (LFAST_TEST_DATA or ../shared/data absent?)")
 
     load_before = os.getloadavg()
-    ours = run_ours(files, args.repeats, args.bin)
+    with tempfile.TemporaryDirectory() as tmp:
+        kps_json = Path(tmp) / "cv2_keypoints.json"
+        cv2_keypoints(files, kps_json)
+        ours = run_ours(files, args.repeats, args.bin, kps_json)
     theirs = run_opencv(files, args.repeats)
     methods = dict(ours["methods"], **theirs)
     if not args.no_cli:
