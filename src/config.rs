@@ -106,6 +106,20 @@ pub struct Config {
     /// such a candidate cannot beat a positive one, so the positive survivors
     /// are the same as without it (docs/quality.md).
     pub reject_edges: bool,
+    /// Beyond the paper, with a cap (`n_features > 0`): a level whose L-FAST
+    /// corners fall short of its quota is topped up with FAST-9 corners found
+    /// as ORB-SLAM's extractor finds them, in cells of about 30 px at this
+    /// threshold, retried at [`fill_fast_min`](Self::fill_fast_min) in a cell
+    /// where it finds none; the L-FAST corners are all kept first, the fill
+    /// corners (`class_id = 1`) take only what is left of the quota
+    /// (docs/algorithm.md, "Fill"). 0 = off (the default), else
+    /// `fill_fast_min..=255`. CPU only. `lfast::ORBextractor` sets it from
+    /// ORB-SLAM's `iniThFAST`.
+    pub fill_fast_ini: u32,
+    /// The FAST threshold of the fill's retry in a cell where
+    /// [`fill_fast_ini`](Self::fill_fast_ini) found nothing (ORB-SLAM's
+    /// `minThFAST`): 0 with the fill off, else `1..=fill_fast_ini`.
+    pub fill_fast_min: u32,
 }
 
 /// Denominator of the rational `delta` (SPEC 1): `delta_num = round(delta * DELTA_DEN)`.
@@ -129,6 +143,8 @@ impl Default for Config {
             descriptor: DescriptorKind::Lfast,
             snap_radius: 2,
             reject_edges: true,
+            fill_fast_ini: 0,
+            fill_fast_min: 0,
         }
     }
 }
@@ -143,6 +159,12 @@ pub fn gpu_supports(cfg: &Config) -> Result<()> {
             "descriptor",
             "`opencv` is CPU-only: OpenCV's f32 blur (fused multiply-adds) and f32 cos/sin \
              have no bit-exact WGSL equivalent; use Backend::Cpu or Backend::Auto",
+        ));
+    }
+    if cfg.fills() {
+        return Err(bad(
+            "fill_fast_ini",
+            "the FAST fill is CPU-only (the GPU pipeline has no FAST stage); use Backend::Cpu or Backend::Auto",
         ));
     }
     Ok(())
@@ -197,7 +219,39 @@ impl Config {
                 format!("must be 0 (continuous) or 1..=360, got {}", self.orientation_bins),
             ));
         }
+        match (self.fill_fast_ini, self.fill_fast_min) {
+            (0, 0) => {}
+            (0, m) => {
+                return Err(bad("fill_fast_min", format!("must be 0 while fill_fast_ini is 0 (fill off), got {m}")));
+            }
+            (i, _) if i > 255 => return Err(bad("fill_fast_ini", format!("must be 0 (off) or 1..=255, got {i}"))),
+            (i, m) if m == 0 || m > i => {
+                return Err(bad("fill_fast_min", format!("must be 1..=fill_fast_ini ({i}) with the fill on, got {m}")));
+            }
+            _ if self.n_features == 0 => {
+                return Err(bad(
+                    "fill_fast_ini",
+                    "the fill tops levels up to their quotas, so it needs a cap (n_features > 0)",
+                ));
+            }
+            _ => {}
+        }
         Ok(())
+    }
+
+    /// Whether the FAST fill is on ([`fill_fast_ini`](Self::fill_fast_ini) > 0).
+    pub fn fills(&self) -> bool {
+        self.fill_fast_ini > 0
+    }
+
+    /// This configuration with the FAST fill off.
+    ///
+    /// ```
+    /// let c = lfast::Config { n_features: 500, fill_fast_ini: 20, fill_fast_min: 7, ..Default::default() };
+    /// assert!(c.fills() && !c.without_fill().fills());
+    /// ```
+    pub fn without_fill(self) -> Self {
+        Self { fill_fast_ini: 0, fill_fast_min: 0, ..self }
     }
 
     /// The paper's pipeline literally (SPEC 1-10 as written): `mode = "paper"`,

@@ -99,9 +99,15 @@ impl Detector {
     pub fn with_gpu_options(cfg: Config, backend: Backend, opts: &GpuOptions) -> Result<Self> {
         let cpu = CpuDetector::new(cfg.clone())?;
         let auto = backend == Backend::Auto;
+        if backend == Backend::Gpu {
+            // what the GPU path cannot do fails by its field's name, before a device is opened
+            crate::config::gpu_supports(&gpu_config(cfg.clone()))?;
+        }
         let gpu = match backend {
             Backend::Cpu => None,
             Backend::Gpu => Some(GpuContext::new(opts).and_then(|ctx| GpuDetector::new(ctx, gpu_config(cfg)))?),
+            // the FAST fill is CPU-only (Backend::Gpu above refuses it by name)
+            Backend::Auto if cfg.fills() => None,
             Backend::Auto => match GpuContext::new_auto(opts).and_then(|ctx| GpuDetector::new(ctx, gpu_config(cfg))) {
                 Ok(d) => Some(d),
                 Err(e) => {

@@ -48,6 +48,8 @@ fn toml_round_trip() {
         descriptor: DescriptorKind::Opencv,
         snap_radius: 0,
         reject_edges: false,
+        fill_fast_ini: 25,
+        fill_fast_min: 9,
     };
     c.validate().unwrap();
     let text = c.to_toml_string();

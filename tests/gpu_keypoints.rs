@@ -229,6 +229,7 @@ fn corner_nms_matches_cpu_on_real_images() {
                         y: lv.cands[i][1],
                         response: lv.resp[i],
                         sub: [0, 0],
+                        fill: false,
                     };
                     want.push(bits(&corner_kp(&cfg, &c)));
                 }
@@ -282,7 +283,7 @@ fn corner_nms_breaks_ties_by_position() {
                 t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(lw, lh, &cands));
                 t::upload_level(&ctx, &b, &b.resp, l, &rmap);
                 for i in corner_nms::survivors(&cands, &resp, r, cfg.reject_edges) {
-                    let c = Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i], sub: [0, 0] };
+                    let c = Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i], sub: [0, 0], fill: false };
                     want.push(bits(&corner_kp(&cfg, &c)));
                 }
             }
@@ -354,7 +355,7 @@ fn random_corners(cfg: &Config, w: u32, h: u32, n: usize, seed: u32) -> Vec<Corn
             1 => (rng.below(2000) as f32 - 1000.0) * 1.0e-6,
             _ => f32::from_bits(rng.next_u32() & 0xbfff_ffff), // finite, any sign and scale
         };
-        out.push(Corner { level: l, x, y, response, sub: [0, 0] });
+        out.push(Corner { level: l, x, y, response, sub: [0, 0], fill: false });
     }
     out
 }
@@ -432,7 +433,7 @@ fn select_with_every_corner_in_one_bucket() {
 fn select_orders_signed_zeros_and_ties() {
     let Some(ctx) = t::context() else { return };
     let pass = SelectPass::new(&ctx.device);
-    let c = |level, x, y, response| Corner { level, x, y, response, sub: [0, 0] };
+    let c = |level, x, y, response| Corner { level, x, y, response, sub: [0, 0], fill: false };
     let corners = vec![
         c(0, 30, 20, -0.0),
         c(0, 20, 20, 0.0),
@@ -509,6 +510,7 @@ fn response_nms_select_chain_matches_cpu() {
                             y: lv.cands[i][1],
                             response: lv.resp[i],
                             sub: [0, 0],
+                            fill: false,
                         })
                         .collect::<Vec<_>>(),
                 );

@@ -106,6 +106,14 @@ pub struct LfastConfig {
     /// Beyond the paper: a candidate whose Harris response is not above 0 (an
     /// edge, in Harris and Stephens' sense) is no corner.
     pub reject_edges: bool,
+    /// Beyond the paper, with a cap: a level whose L-FAST corners fall short of
+    /// its quota is topped up with FAST-9 corners found cell by cell at this
+    /// threshold (ORB-SLAM's `iniThFAST`), `class_id` 1; 0 = off, else
+    /// `fill_fast_min..=255`. CPU only.
+    pub fill_fast_ini: u32,
+    /// The fill's FAST threshold in a cell where `fill_fast_ini` found nothing
+    /// (ORB-SLAM's `minThFAST`): 0 with the fill off, else `1..=fill_fast_ini`.
+    pub fill_fast_min: u32,
 }
 
 impl From<&Config> for LfastConfig {
@@ -132,6 +140,8 @@ impl From<&Config> for LfastConfig {
             },
             snap_radius: c.snap_radius,
             reject_edges: c.reject_edges,
+            fill_fast_ini: c.fill_fast_ini,
+            fill_fast_min: c.fill_fast_min,
         }
     }
 }
@@ -174,6 +184,8 @@ impl LfastConfig {
             descriptor,
             snap_radius: self.snap_radius,
             reject_edges: self.reject_edges,
+            fill_fast_ini: self.fill_fast_ini,
+            fill_fast_min: self.fill_fast_min,
         };
         cfg.validate()?;
         Ok(cfg)

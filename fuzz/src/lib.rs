@@ -129,6 +129,9 @@ pub fn config(r: &mut Bytes) -> Config {
         descriptor: if r.u8() & 3 == 0 { DescriptorKind::Opencv } else { DescriptorKind::Lfast },
         snap_radius: r.pick(&[0, 0, 1, 2, 17]),
         reject_edges: r.u8() & 1 == 1,
+        // the fill mostly off; on, sometimes with thresholds out of range
+        fill_fast_ini: r.pick(&[0, 0, 0, 20, 20, 7, 1, 255, 256]),
+        fill_fast_min: r.pick(&[0, 0, 7, 7, 1, 20, 21]),
     }
 }
 

@@ -112,7 +112,14 @@ impl OrbDetector {
                     .iter()
                     .map(|k| {
                         let (x, y) = (k.pt.x as u32, k.pt.y as u32);
-                        Corner { level: l as u32, x, y, response: response::harris(img, x, y), sub: [0, 0] }
+                        Corner {
+                            level: l as u32,
+                            x,
+                            y,
+                            response: response::harris(img, x, y),
+                            sub: [0, 0],
+                            fill: false,
+                        }
                     })
                     .collect();
                 cs.sort_by(order);

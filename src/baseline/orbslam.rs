@@ -37,7 +37,7 @@ pub const MIN_TH_FAST: i32 = 7;
 /// Keypoints lie at least this far from every side of their level.
 pub const MIN_BORDER: u32 = 16;
 /// Pixels the FAST circle reads beyond a candidate.
-const FAST_MARGIN: u32 = 3;
+pub const FAST_MARGIN: u32 = 3;
 
 /// Parameters of the ORB-SLAM extractor (defaults as ORB-SLAM2/3's settings files).
 #[derive(Clone, Debug, PartialEq)]
@@ -70,9 +70,7 @@ impl Default for OrbSlamParams {
 /// assert_eq!(cells, vec![(0, 0, 32, 40), (32, 0, 64, 40), (64, 0, 95, 40)]);
 /// ```
 pub fn cells(w: u32, h: u32) -> Vec<(u32, u32, u32, u32)> {
-    let cols = (w / CELL).max(1);
-    let rows = (h / CELL).max(1);
-    let (cw, ch) = (w.div_ceil(cols), h.div_ceil(rows));
+    let CellGrid { cols, rows, cw, ch } = cell_grid(w, h);
     let mut out = Vec::with_capacity((cols * rows) as usize);
     for r in 0..rows {
         for c in 0..cols {
@@ -86,8 +84,29 @@ pub fn cells(w: u32, h: u32) -> Vec<(u32, u32, u32, u32)> {
     out
 }
 
+/// The cells of [`cells`]: `cols` x `rows` of `cw` x `ch` pixels (the last
+/// column and row clipped to the region).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CellGrid {
+    /// Columns, >= 1.
+    pub cols: u32,
+    /// Rows, >= 1.
+    pub rows: u32,
+    /// Width of a cell.
+    pub cw: u32,
+    /// Height of a cell.
+    pub ch: u32,
+}
+
+/// The grid of [`cells`] over a region `[0, w) x [0, h)` (`w, h >= 1`).
+pub fn cell_grid(w: u32, h: u32) -> CellGrid {
+    let cols = (w / CELL).max(1);
+    let rows = (h / CELL).max(1);
+    CellGrid { cols, rows, cw: w.div_ceil(cols), ch: h.div_ceil(rows) }
+}
+
 /// A copy of `img`'s rectangle `[x0, x1) x [y0, y1)`.
-fn crop(img: &Plane<u8>, x0: u32, y0: u32, x1: u32, y1: u32) -> Plane<u8> {
+pub fn crop(img: &Plane<u8>, x0: u32, y0: u32, x1: u32, y1: u32) -> Plane<u8> {
     let (w, h) = (x1 - x0, y1 - y0);
     let mut data = Vec::with_capacity((w * h) as usize);
     for y in y0..y1 {
@@ -121,6 +140,7 @@ pub fn level_fast(img: &Plane<u8>, level: u32, ini: i32, min: i32) -> Vec<Corner
             y: y0 + k.pt.y as u32,
             response: k.response,
             sub: [0, 0],
+            fill: false,
         }));
     }
     out

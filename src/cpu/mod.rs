@@ -8,6 +8,7 @@
 pub mod blur;
 pub mod classify;
 pub mod corner_nms;
+pub mod fill;
 pub mod fused;
 pub mod gradient;
 pub mod histogram;
@@ -39,6 +40,10 @@ use local_threshold::WindowGrid;
 use orb::{Pattern, RotatedPatterns};
 use rayon::prelude::*;
 use select::Corner;
+
+/// `class_id` of a keypoint of the FAST fill (`Config::fill_fast_ini`); an
+/// L-FAST keypoint's is -1, as OpenCV's default.
+pub const FILL_CLASS_ID: i32 = 1;
 
 /// The improved Canny edge map of one image with every intermediate (SPEC 1-7).
 #[derive(Clone, Debug)]
@@ -367,7 +372,7 @@ impl CpuDetector {
             } else {
                 [0, 0]
             };
-            at.push(Corner { level: l, x: x as u32, y: y as u32, response: kp.response, sub });
+            at.push(Corner { level: l, x: x as u32, y: y as u32, response: kp.response, sub, fill: false });
         }
         if self.cfg.descriptor == DescriptorKind::Opencv {
             return Ok(self.describe_opencv(&image.to_plane(), keypoints));
@@ -426,7 +431,14 @@ impl CpuDetector {
             let mut kept: Vec<Corner> =
                 corner_nms::survivors(&cands, &resp, self.cfg.nms_radius, self.cfg.reject_edges)
                     .into_iter()
-                    .map(|i| Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i], sub: [0, 0] })
+                    .map(|i| Corner {
+                        level: l as u32,
+                        x: cands[i][0],
+                        y: cands[i][1],
+                        response: resp[i],
+                        sub: [0, 0],
+                        fill: false,
+                    })
                     .collect();
             if self.cfg.snap() > 0 {
                 let m = masks.as_ref().map(|m| &m[l]);
@@ -450,7 +462,25 @@ impl CpuDetector {
                     .collect::<Vec<_>>()
             },
         );
-        let per_level: Vec<Vec<Corner>> = std::iter::once(first).chain(others).collect();
+        let mut per_level: Vec<Vec<Corner>> = std::iter::once(first).chain(others).collect();
+        let found: usize = per_level.iter().map(Vec::len).sum();
+        if let Some(fp) = fill::FillParams::from_config(&self.cfg).filter(|_| found < self.cfg.n_features as usize) {
+            // fewer L-FAST corners than the cap: levels short of their quota
+            // take FAST corners (docs/algorithm.md, "Fill")
+            let quotas = select::level_quotas(self.cfg.n_features, &sizes);
+            let (levels, edges) = (&ws.levels, &ws.edges);
+            per_level.par_iter_mut().enumerate().for_each(|(l, cs)| {
+                let img = &levels[l];
+                // D of this frame exists where level_corners ran (wider and taller than twice the border)
+                let short = (quotas[l] as usize).saturating_sub(cs.len());
+                if short > 0 && img.width > 2 * params.border && img.height > 2 * params.border {
+                    let m = masks.as_ref().map(|m| &m[l]);
+                    // twice the shortfall, so that the quadtree has a choice
+                    let extra = fill::fill_level(img, &edges[l].denoised, l as u32, cs, m, &fp, 2 * short);
+                    cs.extend(extra);
+                }
+            });
+        }
         Ok(select::select(per_level, &sizes, self.cfg.n_features, self.cfg.distribution))
     }
 
@@ -461,7 +491,8 @@ impl CpuDetector {
         let bin = self.rotated.as_ref().map_or(0, |r| r.bins.bin_of(m10, m01));
         let kp =
             spec::keypoint_at_sub(c.level, [c.x, c.y], c.sub, s, centre, orientation::angle_deg(m10, m01), c.response);
-        (kp, bin)
+        // the fill's FAST corners are told apart by their class (docs/algorithm.md, "Fill")
+        (KeyPoint { class_id: if c.fill { FILL_CLASS_ID } else { kp.class_id }, ..kp }, bin)
     }
 
     /// The descriptor of corner `c` (SPEC 11): with a snap, at its sub-pixel

@@ -18,6 +18,8 @@ pub struct Corner {
     /// Sub-pixel offset of the snapped corner, in 1/[`SUBPIXEL`](crate::spec::SUBPIXEL)
     /// of a level pixel, each in `-7..=7` ([`crate::cpu::snap`]); `[0, 0]` without snap.
     pub sub: [i8; 2],
+    /// A FAST corner of the fill (`Config::fill_fast_ini`), not an L-FAST one.
+    pub fill: bool,
 }
 
 /// SPEC 9's output order: response descending, then level, y, x ascending.
@@ -112,6 +114,14 @@ pub fn distribute_quadtree(corners: &[Corner], width: u32, height: u32, n: usize
 /// order. Without a cap (`n == 0`) everything is kept. With one, each level
 /// keeps up to its quota (strongest first, or spread by the quadtree); quota
 /// left unused by a level is filled from the best remaining corners of any level.
+///
+/// Fill corners ([`Corner::fill`]) only take what the L-FAST corners leave:
+/// the L-FAST corners are selected first, exactly as without them (so the
+/// result without fill corners is a subset of the result with them); then,
+/// while fewer than `n` are taken, each level short of its quota takes fill
+/// corners up to the shortfall (strongest, or spread by the quadtree over the
+/// fill corners), the best of those (SPEC 9 order) up to the slots left, and
+/// any slots still left go to the best remaining fill corners of any level.
 pub fn select(per_level: Vec<Vec<Corner>>, sizes: &[(u32, u32)], n: u32, distribution: bool) -> Vec<Corner> {
     if n == 0 {
         let mut all: Vec<Corner> = per_level.into_iter().flatten().collect();
@@ -119,29 +129,62 @@ pub fn select(per_level: Vec<Vec<Corner>>, sizes: &[(u32, u32)], n: u32, distrib
         return all;
     }
     let quotas = level_quotas(n, sizes);
-    let mut taken = Vec::new();
-    let mut rest = Vec::new();
-    for (l, mut cs) in per_level.into_iter().enumerate() {
+    let (mut taken, mut rest) = (Vec::new(), Vec::new());
+    let mut fills = Vec::with_capacity(per_level.len());
+    for (l, cs) in per_level.into_iter().enumerate() {
         let q = quotas.get(l).copied().unwrap_or(0) as usize;
-        cs.sort_by(order);
-        if cs.len() <= q {
-            taken.extend(cs);
-        } else if distribution {
-            let (w, h) = sizes[l];
-            let chosen = distribute_quadtree(&cs, w, h, q);
-            let at: std::collections::HashSet<(u32, u32)> = chosen.iter().map(|k| (k.x, k.y)).collect();
-            rest.extend(cs.into_iter().filter(|c| !at.contains(&(c.x, c.y))));
-            taken.extend(chosen);
-        } else {
-            rest.extend(cs.split_off(q));
-            taken.extend(cs);
-        }
+        let (mut main, fill): (Vec<Corner>, Vec<Corner>) = cs.into_iter().partition(|c| !c.fill);
+        take_up_to(&mut main, q, sizes[l], distribution, &mut taken, &mut rest);
+        fills.push(fill);
     }
     let spare = (n as usize).saturating_sub(taken.len());
     rest.sort_by(order);
     taken.extend(rest.into_iter().take(spare));
+    let slots = (n as usize).saturating_sub(taken.len());
+    if slots > 0 && fills.iter().any(|f| !f.is_empty()) {
+        let mut per_level_taken = vec![0usize; fills.len()];
+        for c in &taken {
+            per_level_taken[c.level as usize] += 1;
+        }
+        let (mut chosen, mut left) = (Vec::new(), Vec::new());
+        for (l, mut f) in fills.into_iter().enumerate() {
+            let short = (quotas[l] as usize).saturating_sub(per_level_taken[l]);
+            take_up_to(&mut f, short, sizes[l], distribution, &mut chosen, &mut left);
+        }
+        chosen.sort_by(order);
+        left.extend(chosen.drain(chosen.len().min(slots)..));
+        left.sort_by(order);
+        let more = slots - chosen.len();
+        taken.extend(chosen);
+        taken.extend(left.into_iter().take(more));
+    }
     taken.sort_by(order);
     taken
+}
+
+/// Moves up to `q` of `cs` (one level's) into `taken`, the strongest or,
+/// with `distribution`, the quadtree's spread over the level of size `wh`;
+/// the others go to `rest`.
+fn take_up_to(
+    cs: &mut Vec<Corner>,
+    q: usize,
+    (w, h): (u32, u32),
+    distribution: bool,
+    taken: &mut Vec<Corner>,
+    rest: &mut Vec<Corner>,
+) {
+    cs.sort_by(order);
+    if cs.len() <= q {
+        taken.append(cs);
+    } else if distribution {
+        let chosen = distribute_quadtree(cs, w, h, q);
+        let at: std::collections::HashSet<(u32, u32)> = chosen.iter().map(|k| (k.x, k.y)).collect();
+        rest.extend(cs.drain(..).filter(|c| !at.contains(&(c.x, c.y))));
+        taken.extend(chosen);
+    } else {
+        rest.extend(cs.split_off(q));
+        taken.append(cs);
+    }
 }
 
 #[cfg(test)]
@@ -149,7 +192,47 @@ mod tests {
     use super::*;
 
     fn c(level: u32, x: u32, y: u32, r: f32) -> Corner {
-        Corner { level, x, y, response: r, sub: [0, 0] }
+        Corner { level, x, y, response: r, sub: [0, 0], fill: false }
+    }
+
+    /// A fill corner.
+    fn f(level: u32, x: u32, y: u32, r: f32) -> Corner {
+        Corner { fill: true, ..c(level, x, y, r) }
+    }
+
+    #[test]
+    fn fill_corners_take_only_what_l_fast_leaves() {
+        let sizes = [(100, 100)];
+        // 3 weak L-FAST corners and 10 strong fill corners, cap 5: all 3 L-FAST, then the 2 strongest fills
+        let mut cs: Vec<Corner> = (0..3).map(|i| c(0, 10 * i, 5, 1.0 + i as f32)).collect();
+        cs.extend((0..10).map(|i| f(0, 10 * i, 50, 100.0 + i as f32)));
+        let out = select(vec![cs.clone()], &sizes, 5, false);
+        assert_eq!(out.iter().filter(|k| !k.fill).count(), 3, "{out:?}");
+        assert_eq!(out.iter().filter(|k| k.fill).map(|k| k.response).collect::<Vec<_>>(), [109.0, 108.0]);
+        // output in SPEC 9 order whatever the kind
+        assert!(out.windows(2).all(|w| order(&w[0], &w[1]).is_le()));
+        // with the quadtree too
+        let spread = select(vec![cs.clone()], &sizes, 5, true);
+        assert_eq!((spread.len(), spread.iter().filter(|k| !k.fill).count()), (5, 3), "{spread:?}");
+        // enough L-FAST corners: no fill corner at all
+        let many: Vec<Corner> = (0..8).map(|i| c(0, 10 * i, 5, 1.0)).chain((0..4).map(|i| f(0, i, 90, 50.0))).collect();
+        assert!(select(vec![many], &sizes, 5, false).iter().all(|k| !k.fill));
+        // spare quota of an empty level: remaining L-FAST corners before fill corners
+        let l0: Vec<Corner> = (0..4).map(|i| c(0, 10 * i, 5, 1.0)).chain([f(0, 0, 90, 50.0)]).collect();
+        // (and the same with the fill corners on the other level)
+        let out = select(vec![l0[..4].to_vec(), vec![f(1, 5, 5, 50.0)]], &[(100, 100), (100, 100)], 4, false);
+        assert!(out.len() == 4 && out.iter().all(|k| !k.fill), "{out:?}");
+        // short overall: level 1's shortfall is filled first, then level 0's best fill corner
+        let out = select(
+            vec![vec![c(0, 1, 1, 1.0), f(0, 2, 2, 9.0)], vec![f(1, 3, 3, 2.0), f(1, 4, 4, 3.0)]],
+            &[(100, 100), (100, 100)],
+            4,
+            false,
+        );
+        assert_eq!(out.iter().map(|k| (k.level, k.x)).collect::<Vec<_>>(), [(0, 2), (1, 4), (1, 3), (0, 1)]);
+        let out = select(vec![l0, vec![]], &[(100, 100), (100, 100)], 4, false);
+        assert_eq!(level_quotas(4, &[(100, 100), (100, 100)]), [2, 2]);
+        assert!(out.len() == 4 && out.iter().all(|k| !k.fill), "{out:?}");
     }
 
     #[test]

@@ -29,7 +29,7 @@ use crate::image::Plane;
 ///     if (10..31).contains(&x) && (10..31).contains(&y) { 200 } else { 20 }
 /// }).collect()).unwrap();
 /// // a corner found on the top edge, 4 px right of the square's corner
-/// let c = Corner { level: 0, x: 14, y: 10, response: 0.0, sub: [0, 0] };
+/// let c = Corner { level: 0, x: 14, y: 10, response: 0.0, sub: [0, 0], fill: false };
 /// let moved = snap(&img, None, c, 2, 7);
 /// assert!(moved.x < 14 && moved.y > 10);
 /// assert!(moved.response > lfast::cpu::response::harris(&img, 14, 10));
@@ -223,7 +223,7 @@ mod tests {
             });
             Plane::from_vec(21, 21, v.collect()).unwrap()
         };
-        let start = Corner { level: 0, x: 10, y: 10, response: 0.0, sub: [0, 0] };
+        let start = Corner { level: 0, x: 10, y: 10, response: 0.0, sub: [0, 0], fill: false };
         let c = snap(&blob(10.0), None, start, 1, 7);
         assert_eq!((c.x, c.y, c.sub), (10, 10, [0, 0]));
         for (cx, dx) in [(10.5, 0.5), (10.25, 0.25), (9.75, -0.25)] {
@@ -243,7 +243,7 @@ mod tests {
             for border in [0, 2, 7] {
                 for y in border..19 - border {
                     for x in border..23 - border {
-                        let c = Corner { level: 2, x, y, response: -1.0, sub: [0, 0] };
+                        let c = Corner { level: 2, x, y, response: -1.0, sub: [0, 0], fill: false };
                         for s in 0..3 {
                             let what = format!("{seed} {x} {y} {s} {border}");
                             assert_eq!(snap(&d, None, c, s, border), naive(&d, None, c, s, border), "{what}");
@@ -259,7 +259,7 @@ mod tests {
     fn ties_go_to_the_earliest_position() {
         // a flat image: every response is 0, the first pixel of the square wins
         let d = Plane::from_vec(9, 9, vec![50; 81]).unwrap();
-        let c = snap(&d, None, Corner { level: 0, x: 4, y: 4, response: 7.0, sub: [0, 0] }, 1, 0);
+        let c = snap(&d, None, Corner { level: 0, x: 4, y: 4, response: 7.0, sub: [0, 0], fill: false }, 1, 0);
         assert_eq!((c.x, c.y, c.response), (3, 3, 0.0));
     }
 }

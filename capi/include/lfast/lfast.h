@@ -119,6 +119,14 @@ typedef struct {
   // Beyond the paper: a candidate whose Harris response is not above 0 (an
   // edge, in Harris and Stephens' sense) is no corner.
   bool reject_edges;
+  // Beyond the paper, with a cap: a level whose L-FAST corners fall short of
+  // its quota is topped up with FAST-9 corners found cell by cell at this
+  // threshold (ORB-SLAM's `iniThFAST`), `class_id` 1; 0 = off, else
+  // `fill_fast_min..=255`. CPU only.
+  uint32_t fill_fast_ini;
+  // The fill's FAST threshold in a cell where `fill_fast_ini` found nothing
+  // (ORB-SLAM's `minThFAST`): 0 with the fill off, else `1..=fill_fast_ini`.
+  uint32_t fill_fast_min;
 } LfastConfig;
 
 // A borrowed image: `height` rows of `width` pixels, row `y` starting at

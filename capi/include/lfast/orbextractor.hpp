@@ -21,9 +21,17 @@ namespace lfast {
 /// describes on the CPU (Backend::Gpu throws on it, Backend::Auto describes
 /// on the CPU; docs/algorithm.md).
 ///
-/// `iniThFAST` and `minThFAST` are kept for the interface only: L-FAST's
-/// thresholds come from its adaptive Canny stage (SPEC 1-5), not from a FAST
-/// threshold. `mvImagePyramid` is built as ORB-SLAM3 builds it (bilinear
+/// `iniThFAST` and `minThFAST` play the part they play in ORB-SLAM3's own
+/// extractor, for the corners L-FAST does not find: L-FAST's thresholds come
+/// from its adaptive Canny stage (SPEC 1-5), so a smooth or dark level can
+/// hold fewer L-FAST corners than its share of `nfeatures`; such a level is
+/// topped up with FAST-9 corners found cell by cell at `iniThFAST`, retried
+/// at `minThFAST` in a cell with none, as ORB-SLAM3 finds its own
+/// (`fill_fast_ini`, `fill_fast_min`; `class_id` 1). Every L-FAST corner of a
+/// level is kept before any of them, so about `nfeatures` keypoints come
+/// back where the image has that much texture. `iniThFAST <= 0` turns the
+/// fill off; `minThFAST` is clamped into `1..=iniThFAST`.
+/// `mvImagePyramid` is built as ORB-SLAM3 builds it (bilinear
 /// cv::resize of the previous level to `cvRound(size / scale)`), for the
 /// stereo matcher that reads it; detection uses lfast's own pyramid (SPEC 10).
 class ORBextractor {
@@ -33,7 +41,7 @@ public:
     ORBextractor(int nfeatures, float scaleFactor, int nlevels, int iniThFAST, int minThFAST,
                  Backend backend = Backend::Auto)
         : nfeatures_(nfeatures), scaleFactor_(scaleFactor), nlevels_(nlevels), iniThFAST_(iniThFAST),
-          minThFAST_(minThFAST), det_(config_for(nfeatures, scaleFactor, nlevels), backend) {
+          minThFAST_(minThFAST), det_(config_for(nfeatures, scaleFactor, nlevels, iniThFAST, minThFAST), backend) {
         mvScaleFactor.resize(nlevels);
         mvLevelSigma2.resize(nlevels);
         mvScaleFactor[0] = 1.0f;
@@ -101,7 +109,7 @@ public:
     int GetMinThFAST() const noexcept { return minThFAST_; }
 
 protected:
-    static Config config_for(int nfeatures, float scaleFactor, int nlevels) {
+    static Config config_for(int nfeatures, float scaleFactor, int nlevels, int iniThFAST, int minThFAST) {
         Config c = default_config();
         c.n_features = nfeatures < 0 ? UINT32_MAX : static_cast<uint32_t>(nfeatures);
         c.scale_factor = scaleFactor;
@@ -109,6 +117,11 @@ protected:
         c.distribution = true;
         c.orientation_bins = 0;
         c.descriptor = LFAST_DESCRIPTOR_KIND_OPENCV;
+        if (iniThFAST > 0 && c.n_features > 0) {
+            // above 255 is refused by the validation, with the field's name
+            c.fill_fast_ini = static_cast<uint32_t>(iniThFAST);
+            c.fill_fast_min = static_cast<uint32_t>(minThFAST < 1 ? 1 : (minThFAST > iniThFAST ? iniThFAST : minThFAST));
+        }
         return c;
     }
 
