@@ -142,7 +142,9 @@ class Detector:
     ``straight_tol``, ``border``, ``nms_radius``, ``n_levels``,
     ``scale_factor``, ``n_features`` (0 = no cap), ``distribution``,
     ``orientation_bins``, ``descriptor`` (``"lfast"`` or ``"opencv"``: equal
-    to ``cv2.ORB_create().compute()``'s, CPU only), ``snap_radius``, ``reject_edges``. A bad value raises ``ValueError`` naming the field;
+    to ``cv2.ORB_create().compute()``'s, CPU only), ``snap_radius``, ``reject_edges``,
+    ``fill_fast_ini`` and ``fill_fast_min`` (with a cap, FAST corners top up
+    levels L-FAST leaves short, ``class_id`` 1; 0 = off; CPU only). A bad value raises ``ValueError`` naming the field;
     an unknown name raises ``TypeError``.
 
     One detector may be shared by threads; each call releases the GIL.
