@@ -144,7 +144,7 @@ impl Indexed {
                 len, c.message_start_time, c.message_end_time
             )
         };
-        if len > RECORD_LIMIT || len < 9 {
+        if !(9..=RECORD_LIMIT).contains(&len) {
             return Err(format!("{}: a chunk record of {len} bytes", place()));
         }
         self.buf.resize(len, 0);
@@ -199,9 +199,16 @@ impl Indexed {
     }
 }
 
+/// The linear reader of a file without a summary, and the bytes it has read.
+struct LinearMode {
+    reader: Linear,
+    count: Arc<AtomicU64>,
+    done: bool,
+}
+
 enum Mode {
     Indexed(Box<Indexed>),
-    Linear { reader: Linear, count: Arc<AtomicU64>, done: bool },
+    Linear(Box<LinearMode>),
 }
 
 /// The messages of one topic of an MCAP file.
@@ -310,7 +317,7 @@ impl McapSource {
         let mut file = std::fs::File::open(path).map_err(|e| e.to_string())?;
         let file_len = file.metadata().map_err(|e| e.to_string())?.len();
         let mut magic = [0u8; 8];
-        if file.read_exact(&mut magic).is_err() || &magic != mcap::MAGIC {
+        if file.read_exact(&mut magic).is_err() || magic[..] != *mcap::MAGIC {
             return Err("not an MCAP file (no MCAP magic at the start)".into());
         }
         let sum = summary(&mut file);
@@ -360,7 +367,7 @@ impl McapSource {
             total,
             schema,
             file_len,
-            mode: Mode::Linear { reader, count, done: false },
+            mode: Mode::Linear(Box::new(LinearMode { reader, count, done: false })),
         })
     }
 
@@ -374,7 +381,8 @@ impl McapSource {
     pub fn next_message(&mut self) -> Option<Result<RawMessage, String>> {
         match &mut self.mode {
             Mode::Indexed(ix) => ix.next(),
-            Mode::Linear { reader, count, done } => {
+            Mode::Linear(l) => {
+                let LinearMode { reader, count, done } = &mut **l;
                 if *done {
                     return None;
                 }

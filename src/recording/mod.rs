@@ -224,7 +224,7 @@ impl Packet {
 }
 
 enum Source {
-    Mcap(mcap_in::McapSource),
+    Mcap(Box<mcap_in::McapSource>),
     Video(video::VideoSource),
 }
 
@@ -271,7 +271,7 @@ impl Recording {
                         ),
                     });
                 }
-                Source::Mcap(s)
+                Source::Mcap(Box::new(s))
             }
             Format::Video => Source::Video(video::VideoSource::open(path).map_err(rec_err)?),
         };
@@ -390,7 +390,7 @@ impl Iterator for Recording {
             }
             let k = self.in_range;
             self.in_range += 1;
-            if k % self.sel.every.max(1) != 0 {
+            if !k.is_multiple_of(self.sel.every.max(1)) {
                 continue;
             }
             return Some(Ok(Packet { index, time_ns, payload }));

@@ -145,7 +145,7 @@ impl<'a> Cdr<'a> {
 
     fn align(&mut self, n: usize) {
         let n = n.min(self.max_align);
-        self.pos = (self.pos + n - 1) / n * n;
+        self.pos = self.pos.div_ceil(n) * n;
         self.pos = self.pos.min(self.body.len());
     }
 
