@@ -9,7 +9,7 @@
 //!
 //! `--write-bag` writes the same N windows instead, as `sensor_msgs/msg/Image`
 //! mono8 messages (CDR) of the topic `/soak/image` at 30 Hz, in an MCAP file
-//! (zstd chunks), for `scripts/soak.sh --bag` to run `lfast detect` over.
+//! (uncompressed chunks), for `scripts/soak.sh --bag` to run `lfast detect` over.
 //!
 //! The frames are WxH windows (default 256x256) of IMAGE (cut at eight offsets along its
 //! diagonal, so that consecutive frames differ), passed to
@@ -139,7 +139,8 @@ fn write_bag(
 ) -> Result<(), Box<dyn std::error::Error>> {
     const MSGDEF: &str = "std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\nuint8 is_bigendian\nuint32 step\nuint8[] data\n================================================================================\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n================================================================================\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n";
     let file = std::io::BufWriter::new(std::fs::File::create(path)?);
-    let mut out = mcap::WriteOptions::new().profile("ros2").compression_threads(0).create(file)?;
+    // uncompressed chunks: writing a 2 GB bag is then a matter of seconds
+    let mut out = mcap::WriteOptions::new().profile("ros2").compression(None).create(file)?;
     let schema = out.add_schema("sensor_msgs/msg/Image", "ros2msg", MSGDEF.as_bytes())?;
     let channel = out.add_channel(schema, "/soak/image", "cdr", &Default::default())?;
     let t0 = 1_700_000_000_000_000_000u64;
