@@ -6,6 +6,14 @@
 # the samples more than 5% above the mean of the first 10%.
 #
 #   bash scripts/soak.sh [--frames N] [--gpu-frames M] [--size WxH] [--image FILE] [--cpu-only|--gpu-only]
+#   bash scripts/soak.sh --bag [--frames N] [--size WxH] [--image FILE]
+#
+# --bag: the same N windows as sensor_msgs/msg/Image messages in an MCAP file
+# (examples/soak.rs --write-bag), then `lfast detect BAG --format mcap
+# --backend cpu --jobs 1` over it, its VmRSS sampled every half second; the
+# same 5% test, with the second tenth of the samples as the start (the first
+# holds the start-up). Samples in $SOAK_DIR/bag.tsv; the bag and the output are
+# removed afterwards.
 #
 # Defaults: 100000 CPU frames, 10000 GPU frames, 160x120 windows of
 # tests/data/camera_cc0_v0.18plus.png, one rayon thread (frames this small gain
@@ -22,13 +30,14 @@ image=tests/data/camera_cc0_v0.18plus.png
 runs="cpu gpu"
 while [ $# -gt 0 ]; do
     case "$1" in
+        --bag) runs=bag; shift ;;
         --frames) frames=$2; shift 2 ;;
         --gpu-frames) gpu_frames=$2; shift 2 ;;
         --size) size=$2; shift 2 ;;
         --image) image=$2; shift 2 ;;
         --cpu-only) runs=cpu; shift ;;
         --gpu-only) runs=gpu; shift ;;
-        *) echo "usage: $0 [--frames N] [--gpu-frames M] [--size WxH] [--image FILE] [--cpu-only|--gpu-only]" >&2; exit 2 ;;
+        *) echo "usage: $0 [--frames N] [--gpu-frames M] [--size WxH] [--image FILE] [--cpu-only|--gpu-only|--bag]" >&2; exit 2 ;;
     esac
 done
 out=${SOAK_DIR:-target/soak}
@@ -39,7 +48,8 @@ export WGPU_ADAPTER_NAME=${WGPU_ADAPTER_NAME:-llvmpipe}
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-$(mktemp -d)}
 
 cargo build --release --quiet --example soak
-bin=target/release/examples/soak
+target=${CARGO_TARGET_DIR:-target}
+bin=$target/release/examples/soak
 echo "commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown), $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores, RAYON_NUM_THREADS=$RAYON_NUM_THREADS"
 
 # Prints the run's figures from its TSV; exits non-zero when the memory grew.
@@ -62,6 +72,41 @@ check() {
             if (b > 1.05 * a) { printf "%s: memory grew by more than 5%%\n", run; exit 1 }
         }' "$out/$1.tsv"
 }
+
+# --bag: lfast detect over an MCAP file of $frames messages, RSS sampled from outside
+if [ "$runs" = bag ]; then
+    cargo build --release --quiet --bin lfast
+    bag="$out/soak.mcap"
+    "$bin" --write-bag "$bag" --frames "$frames" --size "$size" "$image"
+    echo "==> bag: $(du -h "$bag" | cut -f1), $frames messages of $size; target/release/lfast detect $bag --format mcap --backend cpu --jobs 1 --quiet"
+    rm -rf "$out/bag_out"
+    t0=$(date +%s.%N)
+    "$target/release/lfast" detect "$bag" --out "$out/bag_out" --format mcap --backend cpu --jobs 1 --quiet &
+    pid=$!
+    printf 'seconds\trss_kib\n' > "$out/bag.tsv"
+    while kill -0 "$pid" 2> /dev/null; do
+        rss=$(awk '/^VmRSS:/ { print $2 }' "/proc/$pid/status" 2> /dev/null || true)
+        [ -n "$rss" ] && awk -v a="$t0" -v b="$(date +%s.%N)" -v r="$rss" 'BEGIN { printf "%.1f\t%s\n", b - a, r }' >> "$out/bag.tsv"
+        sleep 0.5
+    done
+    wait "$pid"
+    awk -F'\t' '
+        NR == 1 { next }
+        { n++; t[n] = $1; rss[n] = $2 }
+        END {
+            if (n < 20) { printf "bag: only %d samples\n", n; exit 1 }
+            k = int(n / 10)
+            for (i = 1; i <= k; i++) { a += rss[k + i]; b += rss[n - k + i] }
+            a /= k; b /= k; mx = 0
+            for (i = 1; i <= n; i++) if (rss[i] > mx) mx = rss[i]
+            printf "bag: %.1f s; RSS second 10%% of the samples %.0f KiB, last 10%% %.0f KiB (%+.2f%%), max %d KiB\n", t[n], a, b, 100 * (b - a) / a, mx
+            if (b > 1.05 * a) { print "bag: memory grew by more than 5%"; exit 1 }
+        }' "$out/bag.tsv"
+    status=$?
+    ls -l "$out/bag_out"
+    rm -rf "$bag" "$out/bag_out"
+    exit $status
+fi
 
 status=0
 for run in $runs; do

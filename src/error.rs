@@ -108,6 +108,21 @@ pub enum Error {
         /// The message.
         reason: String,
     },
+    /// A recording (an MCAP file, a video) cannot be read, or cannot be read
+    /// further: the reason says where reading stopped.
+    #[error("{path}: {reason}")]
+    Recording {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, and where.
+        reason: String,
+    },
+    /// A recorded message does not hold what its type says (it ends early).
+    #[error("malformed message: {reason}")]
+    Message {
+        /// The field where it went wrong.
+        reason: String,
+    },
     /// The requested combination is not available on this backend.
     #[error("not supported: {reason}")]
     Unsupported {

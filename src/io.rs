@@ -19,6 +19,24 @@ pub struct Features {
     pub keypoints: Vec<KeyPoint>,
     /// `descriptors[i]` of `keypoints[i]`, 64 hex digits, byte 0 first.
     pub descriptors: Vec<String>,
+    /// Which frame of a recording (`image` is then the recording); absent for image files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<FrameInfo>,
+}
+
+/// Where a frame of a recording (an MCAP file, a video) comes from.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FrameInfo {
+    /// The MCAP topic; absent for video.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub topic: Option<String>,
+    /// The frame's index among all frames of the topic or video, from 0.
+    pub index: u64,
+    /// The message's log time (MCAP) or the presentation time (video), ns.
+    pub time_ns: u64,
+    /// The image's own time stamp (`header.stamp`, `timestamp`), ns; absent for video.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stamp_ns: Option<u64>,
 }
 
 /// Lower-case hex of a descriptor, byte 0 first.
@@ -40,12 +58,26 @@ pub fn hex(d: &Descriptor) -> String {
 
 /// The JSON text of one image's features.
 pub fn features_json(image: &Path, width: u32, height: u32, kps: &[KeyPoint], desc: &[Descriptor]) -> String {
+    frame_features_json(image, None, width, height, kps, desc)
+}
+
+/// The JSON text of the features of one image file (`frame` = `None`) or of
+/// one frame of the recording `image`.
+pub fn frame_features_json(
+    image: &Path,
+    frame: Option<&FrameInfo>,
+    width: u32,
+    height: u32,
+    kps: &[KeyPoint],
+    desc: &[Descriptor],
+) -> String {
     let f = Features {
         image: image.display().to_string(),
         width,
         height,
         keypoints: kps.to_vec(),
         descriptors: desc.iter().map(hex).collect(),
+        frame: frame.cloned(),
     };
     serde_json::to_string_pretty(&f).expect("features always serialise")
 }
@@ -77,21 +109,56 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 /// ```
 pub fn write_atomic_with(path: &Path, fill: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>) -> Result<()> {
-    let io = |source| Error::Io { path: path.to_path_buf(), source };
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let prefix = format!(".{name}.{}-", std::process::id());
-    let mut b = tempfile::Builder::new();
-    b.prefix(&prefix).suffix(TMP_SUFFIX).rand_bytes(6);
-    // the mode a plain File::create gives (0666 less the umask), not tempfile's 0600
-    #[cfg(unix)]
-    b.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    // On every early return the NamedTempFile drops, which removes it.
-    let mut tmp = b.tempfile_in(dir).map_err(io)?;
-    fill(tmp.as_file_mut()).map_err(io)?;
-    tmp.as_file().sync_all().map_err(io)?;
-    tmp.persist(path).map_err(|e| io(e.error))?;
-    Ok(())
+    let mut f = AtomicFile::create(path)?;
+    fill(f.file()).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    f.commit()
+}
+
+/// A file written over time and put in place at once: the writes go to a
+/// temporary file beside `path` (as [`write_atomic_with`]'s), which
+/// [`commit`](Self::commit) syncs and renames over `path`. Dropped without a
+/// commit (an error, an interrupt), it is removed and `path` keeps what it had.
+#[derive(Debug)]
+pub struct AtomicFile {
+    path: std::path::PathBuf,
+    tmp: tempfile::NamedTempFile,
+}
+
+impl AtomicFile {
+    /// Creates the temporary file for `path`.
+    pub fn create(path: &Path) -> Result<Self> {
+        let io = |source| Error::Io { path: path.to_path_buf(), source };
+        let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let prefix = format!(".{name}.{}-", std::process::id());
+        let mut b = tempfile::Builder::new();
+        b.prefix(&prefix).suffix(TMP_SUFFIX).rand_bytes(6);
+        // the mode a plain File::create gives (0666 less the umask), not tempfile's 0600
+        #[cfg(unix)]
+        b.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        // On every early return the NamedTempFile drops, which removes it.
+        let tmp = b.tempfile_in(dir).map_err(io)?;
+        Ok(AtomicFile { path: path.to_path_buf(), tmp })
+    }
+
+    /// The temporary file, to write to.
+    pub fn file(&mut self) -> &mut std::fs::File {
+        self.tmp.as_file_mut()
+    }
+
+    /// The destination.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Syncs the temporary file and renames it over the destination.
+    pub fn commit(self) -> Result<()> {
+        let io = |source| Error::Io { path: self.path.clone(), source };
+        self.tmp.as_file().sync_all().map_err(io)?;
+        let path = self.path.clone();
+        self.tmp.persist(&path).map_err(|e| Error::Io { path, source: e.error })?;
+        Ok(())
+    }
 }
 
 /// The suffix of [`write_atomic_with`]'s temporary files.

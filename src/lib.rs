@@ -24,6 +24,8 @@
 //! - `cli` (default): the `lfast` command-line tool; implies `eval` and `vo`.
 //! - `eval`: the detector evaluation suites (`eval` module).
 //! - `vo`: monocular visual odometry on KITTI (`vo` module).
+//! - `recordings`: frames from MCAP files and videos (`recording` module;
+//!   the `mcap` crate, and the `ffmpeg` program at run time for video).
 //!
 //! `default-features = false` is the library alone (no clap, plotters,
 //! indicatif or nalgebra); `features = ["gpu"]` adds the GPU path.
@@ -50,6 +52,8 @@ pub mod gpu;
 pub mod image;
 pub mod io;
 mod keypoint;
+#[cfg(feature = "recordings")]
+pub mod recording;
 pub mod rng;
 pub mod spec;
 #[cfg(feature = "gpu")]

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import functools
 import os
-from typing import Any, Iterable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Iterable, Iterator, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -50,6 +50,7 @@ __all__ = [
     "array_to_keypoints",
     "default_config",
     "detect_file",
+    "frames",
     "hamming",
     "imread",
     "keypoints_to_array",
@@ -327,3 +328,42 @@ def detect_file(
     write_features(base, path, img.shape[1], img.shape[0], kps, desc, formats)
     return int(kps.shape[0])
 
+
+
+#: Image file extensions :func:`frames` takes from a folder (as ``lfast detect``).
+IMAGE_EXTENSIONS: Tuple[str, ...] = (
+    ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".ppm", ".pnm", ".pbm",
+)
+
+
+def frames(path: PathLike, topic: Optional[str] = None) -> Iterator[Tuple[Optional[int], np.ndarray]]:
+    """The frames of a folder, a video or an MCAP file, as ``(timestamp, image)``.
+
+    ``image`` is the frame as ``lfast detect`` reads it: a uint8 H x W gray
+    array (SPEC 0: colour by OpenCV's BT.601 luma, 16-bit by ``v >> 8``),
+    ready for :meth:`Detector.detectAndCompute` or any cv2 function.
+    ``timestamp`` is an int in nanoseconds: the message's log time (MCAP) or
+    the presentation time (video); ``None`` for a folder.
+
+    - A folder: its image files (not its subfolders), sorted by name.
+    - An MCAP file (``.mcap``, e.g. a ROS 2 bag): the frames of ``topic``
+      (default: the file's one image topic; with several, the error lists
+      them), in log-time order: ``sensor_msgs/msg/Image`` (mono8, mono16,
+      rgb8, bgr8, rgba8, bgra8), ``sensor_msgs/msg/CompressedImage`` (png,
+      jpeg), ``foxglove.RawImage``, ``foxglove.CompressedImage``.
+    - A video (mp4, mkv, avi, mov, webm): decoded by the ``ffmpeg`` program.
+
+    Frames are read one at a time: memory does not grow with the recording.
+    A damaged file (truncated, a chunk with a bad CRC) raises ``ValueError``
+    saying where reading stopped, after every intact frame before it;
+    another image encoding raises ``RuntimeError`` naming it.
+    """
+    p = os.fspath(path)
+    if os.path.isdir(p):
+        names = sorted(n for n in os.listdir(p) if n.lower().endswith(IMAGE_EXTENSIONS) and not n.startswith("."))
+        for n in names:
+            f = os.path.join(p, n)
+            if os.path.isfile(f):
+                yield None, imread(f)
+        return
+    yield from _lfast.Frames(p, topic)

@@ -44,7 +44,9 @@ fn to_py(e: lfast::Error) -> PyErr {
         | E::MaskSize { .. }
         | E::InvalidKeypoint { .. }
         | E::Image { .. }
-        | E::Pattern { .. } => PyValueError::new_err(msg),
+        | E::Pattern { .. }
+        | E::Recording { .. }
+        | E::Message { .. } => PyValueError::new_err(msg),
         E::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(msg),
         E::Io { .. } => PyOSError::new_err(msg),
         E::NoAdapter { .. } | E::GpuLimits { .. } | E::GpuOutOfMemory { .. } | E::DeviceLost { .. } | E::Gpu { .. } => {
@@ -475,6 +477,59 @@ fn imread(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyArray2<u8>>> {
     Ok(Array2::from_shape_vec((h, w), p.data).expect("H x W").into_pyarray(py))
 }
 
+/// The frames of a recording (MCAP file, video), as `lfast detect` reads
+/// them: an iterator of `(time_ns, gray uint8 H x W array)`.
+#[pyclass(name = "Frames", module = "lfast._lfast")]
+struct PyFrames {
+    rec: std::sync::Mutex<Option<lfast::recording::Recording>>,
+}
+
+#[pymethods]
+impl PyFrames {
+    #[new]
+    #[pyo3(signature = (path, topic = None))]
+    fn new(py: Python<'_>, path: PathBuf, topic: Option<String>) -> PyResult<Self> {
+        let sel = lfast::recording::Selection { topic, ..Default::default() };
+        let rec = py.detach(|| lfast::recording::Recording::open(&path, &sel)).map_err(to_py)?;
+        Ok(PyFrames { rec: std::sync::Mutex::new(Some(rec)) })
+    }
+
+    /// The MCAP topic read (None for video).
+    #[getter]
+    fn topic(&self) -> Option<String> {
+        let g = self.rec.lock().unwrap_or_else(|e| e.into_inner());
+        g.as_ref().and_then(|r| r.topic().map(str::to_string))
+    }
+
+    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
+        slf
+    }
+
+    fn __next__<'py>(&self, py: Python<'py>) -> PyResult<Option<(u64, Bound<'py, PyArray2<u8>>)>> {
+        let next = py.detach(|| {
+            let mut g = self.rec.lock().unwrap_or_else(|e| e.into_inner());
+            let Some(rec) = g.as_mut() else { return Ok(None) };
+            let r = match rec.next() {
+                None => Ok(None),
+                Some(Err(e)) => Err(e),
+                Some(Ok(p)) => p.decode().map(|d| Some((p.time_ns, d.image))),
+            };
+            if !matches!(r, Ok(Some(_))) {
+                // ended, or damaged here: nothing more comes
+                *g = None;
+            }
+            r
+        });
+        match next.map_err(to_py)? {
+            None => Ok(None),
+            Some((t, p)) => {
+                let (w, h) = (p.width as usize, p.height as usize);
+                Ok(Some((t, Array2::from_shape_vec((h, w), p.data).expect("H x W").into_pyarray(py))))
+            }
+        }
+    }
+}
+
 /// Output suffix of each format, as `lfast detect` names its files.
 fn suffixes(format: &str) -> Option<&'static [&'static str]> {
     Some(match format {
@@ -567,6 +622,7 @@ fn output_paths(base: &str, formats: Vec<String>) -> PyResult<Vec<String>> {
 #[pymodule]
 fn _lfast(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyDetector>()?;
+    m.add_class::<PyFrames>()?;
     m.add("GpuError", m.py().get_type::<GpuError>())?;
     m.add_function(wrap_pyfunction!(default_config, m)?)?;
     m.add_function(wrap_pyfunction!(match_arrays, m)?)?;

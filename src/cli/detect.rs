@@ -3,6 +3,8 @@
 //! and the calling thread encodes and writes the outputs, all linked by
 //! bounded channels so that the stages overlap and memory stays bounded.
 
+mod recording;
+
 use super::inputs::{self, Input, Shard};
 use super::report::{self, Reporter};
 use super::{CliError, Common};
@@ -44,6 +46,8 @@ pub(super) enum Format {
     Npy,
     /// IMG.yaml: OpenCV FileStorage
     Yaml,
+    /// Recordings: REC.lfast.mcap, keypoints as foxglove.ImageAnnotations and lfast.Features
+    Mcap,
 }
 
 #[derive(clap::Args)]
@@ -68,6 +72,11 @@ pub(super) struct DetectArgs {
     /// Process only shard K of N (K 0-based): files i % N == K of the sorted list
     #[arg(long, value_name = "K/N")]
     shard: Option<Shard>,
+    /// With --format mcap: copy the image topic (MCAP) or the frames (video) into the file
+    #[arg(long)]
+    include_images: bool,
+    #[command(flatten)]
+    rec: super::recorded::RecordingArgs,
     /// Detector
     #[arg(long, value_enum, default_value_t = FrontEnd::Lfast)]
     detector: FrontEnd,
@@ -92,13 +101,23 @@ fn front_end(kind: FrontEnd, cfg: Config, fast_threshold: i32, common: &Common) 
     Ok(Features::cpu(kind, cfg, fast_threshold, OrbParams::default().n_features)?)
 }
 
+/// One image's (or frame's) features.
+pub(super) struct Detected {
+    pub width: u32,
+    pub height: u32,
+    pub kps: Vec<KeyPoint>,
+    pub desc: Vec<Descriptor>,
+    /// The image, for --draw (and --include-images of a video).
+    pub img: Option<Plane<u8>>,
+}
+
 /// What one file has become so far, passed between the stages.
 enum Stage {
     Skip,
     Failed(String),
     Problem(inputs::Problem),
     Decoded(Plane<u8>),
-    Detected { width: u32, height: u32, kps: Vec<KeyPoint>, desc: Vec<Descriptor>, img: Option<Plane<u8>> },
+    Detected(Detected),
 }
 
 /// `base` + `suffix`, e.g. `out/sub/img` + `.json`.
@@ -108,8 +127,8 @@ fn with_suffix(base: &Path, suffix: &str) -> PathBuf {
     PathBuf::from(s)
 }
 
-/// The output files of one input, in the order they are written.
-fn outputs(base: &Path, formats: &[Format], draw: bool) -> Vec<PathBuf> {
+/// The output files of one input (or frame), in the order they are written.
+pub(super) fn outputs(base: &Path, formats: &[Format], draw: bool) -> Vec<PathBuf> {
     let mut v = Vec::new();
     for f in formats {
         match f {
@@ -120,6 +139,7 @@ fn outputs(base: &Path, formats: &[Format], draw: bool) -> Vec<PathBuf> {
                 v.push(with_suffix(base, ".descriptors.npy"));
             }
             Format::Yaml => v.push(with_suffix(base, ".yaml")),
+            Format::Mcap => {}
         }
     }
     if draw {
@@ -135,12 +155,21 @@ struct Job<'a> {
 
 /// Writes one output file: [`crate::io::write_atomic`] in the binary, a writer
 /// that fails on cue in tests.
-type Write<'a> = &'a dyn Fn(&Path, &[u8]) -> crate::Result<()>;
+pub(super) type Write<'a> = &'a dyn Fn(&Path, &[u8]) -> crate::Result<()>;
 
-/// Encodes and writes every output of one file, through `write`.
-fn write_all(job: &Job, formats: &[Format], st: &Stage, write: Write) -> crate::Result<()> {
-    let Stage::Detected { width, height, kps, desc, img } = st else { return Ok(()) };
-    let mut outs = job.outputs.iter();
+/// Encodes and writes every per-file output of `image` (a frame of it when
+/// `frame` says), through `write`.
+pub(super) fn write_all(
+    image: &Path,
+    frame: Option<&crate::io::FrameInfo>,
+    outputs: &[PathBuf],
+    formats: &[Format],
+    draw: bool,
+    d: &Detected,
+    write: Write,
+) -> crate::Result<()> {
+    let Detected { width, height, kps, desc, img } = d;
+    let mut outs = outputs.iter();
     let mut put = |bytes: &[u8]| -> crate::Result<()> {
         let p = outs.next().expect("one output path per encoded file");
         if let Some(dir) = p.parent() {
@@ -150,16 +179,17 @@ fn write_all(job: &Job, formats: &[Format], st: &Stage, write: Write) -> crate::
     };
     for f in formats {
         match f {
-            Format::Json => put(crate::io::features_json(&job.input.path, *width, *height, kps, desc).as_bytes())?,
+            Format::Json => put(crate::io::frame_features_json(image, frame, *width, *height, kps, desc).as_bytes())?,
             Format::Csv => put(crate::io::features_csv(kps, desc).as_bytes())?,
             Format::Npy => {
                 put(&crate::io::keypoints_npy(kps))?;
                 put(&crate::io::descriptors_npy(desc))?;
             }
             Format::Yaml => put(crate::io::features_yaml(kps, desc).as_bytes())?,
+            Format::Mcap => {}
         }
     }
-    if let Some(img) = img {
+    if draw && let Some(img) = img {
         put(&super::draw::overlay_png(img, kps)?)?;
     }
     Ok(())
@@ -184,6 +214,15 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
         if !formats.contains(f) {
             formats.push(*f);
         }
+    }
+    let (recordings, mine) = super::recorded::split(mine, &a.rec)?;
+    if !recordings.is_empty() {
+        return recording::run(&a, &det, &pool, &recordings, &formats, write);
+    }
+    if formats.contains(&Format::Mcap) || a.include_images {
+        return Err(CliError::Usage(
+            "--format mcap and --include-images are for recordings (MCAP files, videos); the inputs are images".into(),
+        ));
     }
     let jobs: Vec<Job> =
         mine.iter().map(|i| Job { input: i, outputs: outputs(&a.out.join(&i.rel), &formats, a.draw) }).collect();
@@ -234,13 +273,13 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
                 rx_dec.into_iter().par_bridge().for_each(|(i, st)| {
                     let st = match st {
                         Stage::Decoded(img) => match det.detect_and_compute(&img) {
-                            Ok((kps, desc)) => Stage::Detected {
+                            Ok((kps, desc)) => Stage::Detected(Detected {
                                 width: img.width,
                                 height: img.height,
                                 kps,
                                 desc,
                                 img: draw.then_some(img),
-                            },
+                            }),
                             Err(e) => Stage::Failed(report::reason(&e)),
                         },
                         other => other,
@@ -260,9 +299,10 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
                 Stage::Skip => rep.skipped(|| format!("{}: skipped (outputs exist)", job.input.path.display())),
                 Stage::Failed(reason) => rep.failed(&job.input.path, reason),
                 Stage::Problem(p) => rep.problem(&job.input.path, p),
-                Stage::Detected { kps, .. } => match write_all(job, &formats, &st, write) {
-                    Ok(()) => rep.done(kps.len() as u64, || {
-                        format!("{}: {} keypoints -> {}", job.input.path.display(), kps.len(), job.outputs[0].display())
+                Stage::Detected(d) => match write_all(&job.input.path, None, &job.outputs, &formats, draw, d, write) {
+                    Ok(()) => rep.done(d.kps.len() as u64, || {
+                        let (n, to) = (d.kps.len(), job.outputs[0].display());
+                        format!("{}: {n} keypoints -> {to}", job.input.path.display())
                     }),
                     // no later write can succeed: stop at once, the files written stay
                     Err(e) if crate::io::is_disk_full(&e) => {

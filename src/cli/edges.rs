@@ -37,6 +37,8 @@ pub(super) struct EdgesArgs {
     #[arg(long)]
     debug: bool,
     #[command(flatten)]
+    rec: super::recorded::RecordingArgs,
+    #[command(flatten)]
     common: Common,
 }
 
@@ -61,12 +63,17 @@ fn class_colour(c: u8) -> [u8; 3] {
     }
 }
 
-/// The files to write for one input: (path, PNG bytes); returns them and the edge pixel count.
 /// Files to write, (path, bytes), and the edge pixel count.
 type Processed = (Vec<(PathBuf, Vec<u8>)>, u64);
 
 fn process(det: &crate::Detector, input: &Input, edges_path: &Path, debug: bool) -> crate::Result<Processed> {
     let img = crate::image::load_gray(&input.path)?;
+    images(det, &img, edges_path, debug)
+}
+
+/// The edge map of `img` (and with `debug` its intermediates) as PNG files
+/// named after `edges_path` (`x.edges.png`, `x.denoised.png`, ...).
+fn images(det: &crate::Detector, img: &crate::Plane<u8>, edges_path: &Path, debug: bool) -> crate::Result<Processed> {
     let png = super::draw::png;
     if !debug {
         let e = det.edge_image(img.view())?;
@@ -74,7 +81,7 @@ fn process(det: &crate::Detector, input: &Input, edges_path: &Path, debug: bool)
         return Ok((vec![(edges_path.to_path_buf(), png(&e.data, e.width, e.height, ExtendedColorType::L8)?)], n));
     }
     // the intermediates come from the CPU's staged path (equal to the GPU's, tested)
-    let em = crate::cpu::edge_map(&img, det.config());
+    let em = crate::cpu::edge_map(img, det.config());
     let (w, h) = (em.edges.width, em.edges.height);
     let n = em.edges.data.iter().filter(|&&v| v != 0).count() as u64;
     let base = edges_path.with_file_name(
@@ -115,6 +122,7 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
     // One input file and --out FILE.png: write there (the single-image form).
     let single = a.inputs.len() == 1
         && a.from_list.is_none()
+        && crate::recording::format_of(&a.inputs[0]).is_none()
         && !a.inputs[0].is_dir()
         && (a.inputs[0].exists() || !a.inputs[0].to_string_lossy().contains(['*', '?', '[']))
         && is_png_name(&a.out)
@@ -125,6 +133,13 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
         a.out.clone()
     };
     report::prepare_out_dir(&out_dir)?;
+    if !single {
+        let all = inputs::collect(&a.inputs, a.from_list.as_deref(), &out_dir)?;
+        let (recordings, _) = super::recorded::split(all, &a.rec)?;
+        if !recordings.is_empty() {
+            return run_recordings(&a, &det, &pool, &recordings);
+        }
+    }
     let jobs: Vec<(Input, PathBuf)> = if single {
         let inp = inputs::collect(&a.inputs, None, &out_dir)?.remove(0);
         vec![(inp, a.out.clone())]
@@ -184,6 +199,76 @@ pub(super) fn run(a: EdgesArgs) -> Result<bool, CliError> {
         }
     });
     let ok = rep.finish("edge pixels", &format!("backend {backend}, {threads} threads"));
+    report::exit_if_interrupted();
+    Ok(ok)
+}
+
+/// `lfast edges` over recordings: `OUT/REC/INDEX_TIME.edges.png` per frame.
+struct EdgesWork<'a> {
+    det: &'a crate::Detector,
+    debug: bool,
+}
+
+impl super::recorded::Work for EdgesWork<'_> {
+    /// The PNG files by suffix, and the edge pixel count.
+    type Out = Processed;
+    fn outputs(&self, base: &Path) -> Vec<PathBuf> {
+        vec![with_suffix(base, ".edges.png")]
+    }
+    fn process(&self, f: crate::recording::Decoded) -> crate::Result<Processed> {
+        // named by suffix here; the sink puts them beside the frame's base
+        images(self.det, &f.image, Path::new(".edges.png"), self.debug)
+    }
+    fn noun(&self) -> &'static str {
+        "edge pixels"
+    }
+}
+
+struct EdgesSink;
+
+impl super::recorded::Sink<Processed> for EdgesSink {
+    fn recording_exists(&self, _: &Path) -> bool {
+        false
+    }
+    fn per_frame_skip(&self) -> bool {
+        false
+    }
+    fn start(&mut self, _: &crate::recording::Recording, _: &Path) -> crate::Result<()> {
+        Ok(())
+    }
+    fn frame(&mut self, f: &super::recorded::Done<'_, Processed>) -> crate::Result<u64> {
+        let edges = &f.outputs[0];
+        let name = edges.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        let base = edges.with_file_name(name.strip_suffix(".edges.png").unwrap_or(name));
+        let files: Vec<(PathBuf, Vec<u8>)> = f
+            .out
+            .0
+            .iter()
+            .map(|(suffix, bytes)| (with_suffix(&base, &suffix.to_string_lossy()), bytes.clone()))
+            .collect();
+        write(&files)?;
+        Ok(f.out.1)
+    }
+    fn finish(&mut self) -> crate::Result<()> {
+        Ok(())
+    }
+}
+
+fn run_recordings(
+    a: &EdgesArgs,
+    det: &crate::Detector,
+    pool: &rayon::ThreadPool,
+    recordings: &[Input],
+) -> Result<bool, CliError> {
+    report::log_warnings(a.common.quiet);
+    report::catch_interrupts();
+    let mut rep = Reporter::counting(0, a.common.quiet, "frames", "messages");
+    let stop = AtomicBool::new(false);
+    let work = EdgesWork { det, debug: a.debug };
+    let sel = a.rec.selection();
+    super::recorded::run(recordings, &sel, &a.out, false, pool, &work, &mut EdgesSink, &mut rep, &stop);
+    let tail = format!("backend {}, {} threads", det.backend_name(), pool.current_num_threads());
+    let ok = rep.finish("edge pixels", &tail);
     report::exit_if_interrupted();
     Ok(ok)
 }

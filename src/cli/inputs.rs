@@ -75,6 +75,11 @@ fn is_image(p: &Path) -> bool {
     p.extension().and_then(|e| e.to_str()).is_some_and(|e| IMAGE_EXTENSIONS.iter().any(|x| x.eq_ignore_ascii_case(e)))
 }
 
+/// MCAP files and videos: taken from globs (not from directories, which are searched for images).
+fn is_recording(p: &Path) -> bool {
+    crate::recording::format_of(p).is_some()
+}
+
 fn is_hidden(p: &Path) -> bool {
     p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with('.'))
 }
@@ -157,7 +162,7 @@ fn add(arg: &Path, skip: Option<&Path>, out: &mut Vec<Input>) -> Result<(), CliE
             n += 1;
             if p.is_dir() {
                 walk(&p, skip, out);
-            } else if is_image(&p) {
+            } else if is_image(&p) || is_recording(&p) {
                 out.push(file_input(p));
             }
         }

@@ -13,6 +13,8 @@ mod edges;
 mod eval;
 mod info;
 mod inputs;
+mod mcap_out;
+mod recorded;
 mod report;
 mod vo;
 

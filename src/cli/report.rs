@@ -31,6 +31,10 @@ pub struct Reporter {
     bar: Option<ProgressBar>,
     lines: bool,
     start: Instant,
+    /// What the summary counts: "files", or "frames" for recordings.
+    unit: &'static str,
+    /// The bar's position is set by [`Reporter::position`], not by each file.
+    positioned: bool,
     /// The counts so far.
     pub counts: Counts,
     /// The kinds of the walk errors, in the order first met, with their counts.
@@ -41,12 +45,19 @@ impl Reporter {
     /// A bar on stderr when it is a terminal (and not `quiet`), else one line
     /// per file on stdout (none when `quiet`). `total` counts files, not walk errors.
     pub fn new(total: u64, quiet: bool) -> Self {
+        Self::counting(total, quiet, "files", "files")
+    }
+
+    /// A reporter whose bar counts `bar_unit` ("messages": set by
+    /// [`Reporter::position`]) and whose summary counts `unit` ("frames").
+    pub fn counting(total: u64, quiet: bool, unit: &'static str, bar_unit: &'static str) -> Self {
         let tty = std::io::stderr().is_terminal();
         let bar = (!quiet && tty).then(|| {
             let b = ProgressBar::new(total);
-            if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} files  {fps}  ETA {eta}") {
-                b.set_style(style.with_key("fps", |s: &ProgressState, w: &mut dyn std::fmt::Write| {
-                    let _ = write!(w, "{:.1} files/s", s.per_sec());
+            let template = format!("{{bar:40}} {{pos}}/{{len}} {bar_unit}  {{fps}}  ETA {{eta}}");
+            if let Ok(style) = ProgressStyle::with_template(&template) {
+                b.set_style(style.with_key("fps", move |s: &ProgressState, w: &mut dyn std::fmt::Write| {
+                    let _ = write!(w, "{:.1} {bar_unit}/s", s.per_sec());
                 }));
             }
             b
@@ -55,8 +66,20 @@ impl Reporter {
             bar,
             lines: !quiet && !tty,
             start: Instant::now(),
+            unit,
+            positioned: unit != bar_unit,
             counts: Counts::default(),
             walk_kinds: Vec::new(),
+        }
+    }
+
+    /// Sets the bar to `pos` of `len` (`len` 0: unknown, left as it was).
+    pub fn position(&self, pos: u64, len: u64) {
+        if let Some(b) = &self.bar {
+            if len > 0 {
+                b.set_length(len);
+            }
+            b.set_position(pos);
         }
     }
 
@@ -75,7 +98,9 @@ impl Reporter {
 
     fn tick(&self, line: impl FnOnce() -> String) {
         if let Some(b) = &self.bar {
-            b.inc(1);
+            if !self.positioned {
+                b.inc(1);
+            }
         } else if self.lines {
             println!("{}", one_line(&line()));
         }
@@ -86,7 +111,9 @@ impl Reporter {
         // one line per file, whatever the decoder's message holds (zune-jpeg's end in '\n')
         let reason = reason.split_whitespace().collect::<Vec<_>>().join(" ");
         self.error_line(&format!("lfast: {}: {reason}", path.display()));
-        if let Some(b) = &self.bar {
+        if let Some(b) = &self.bar
+            && !self.positioned
+        {
             b.inc(1);
         }
     }
@@ -146,11 +173,12 @@ impl Reporter {
         let c = self.counts;
         let fps = if secs > 0.0 { c.done as f64 / secs } else { 0.0 };
         println!(
-            "summary: done {}, skipped {}, failed {} of {} files;{} {} {what}; {secs:.2} s, {fps:.1} frames/s; {tail}",
+            "summary: done {}, skipped {}, failed {} of {} {};{} {} {what}; {secs:.2} s, {fps:.1} frames/s; {tail}",
             c.done,
             c.skipped,
             c.failed,
             c.done + c.skipped + c.failed,
+            self.unit,
             walk_clause(c.walk_errors, &self.walk_kinds),
             c.items
         );
@@ -277,6 +305,7 @@ pub fn reason(e: &crate::Error) -> String {
     match e {
         crate::Error::Io { source, .. } => source.to_string(),
         crate::Error::Image { source, .. } => source.to_string(),
+        crate::Error::Recording { reason, .. } => reason.clone(),
         other => other.to_string(),
     }
 }

@@ -7,9 +7,14 @@ use crate::vo::geometry::RansacOptions;
 use crate::vo::{self, Align, FrontEnd, VoError, VoOptions, kitti};
 use std::path::PathBuf;
 
+mod recording;
+
 pub(super) const VO_AFTER_HELP: &str = "\
 SEQ_DIR is a KITTI odometry folder: image_0/*.png (sorted by name), calib.txt (P0, labelled
 `P0:` or the first unlabelled row) and, optionally, poses.txt (ground truth, 3x4 camera-to-world).
+It may also be a recording: an MCAP file (--topic, or its one image topic; the intrinsics from
+its sensor_msgs/msg/CameraInfo topic, else --calib) or a video (--calib); --poses then gives the
+ground truth, one pose per frame of the topic or video.
 With poses, each step's length is the ground truth's (the monocular VO protocol) and the ATE
 is computed. Outputs in OUT (OUT/<features>/ when several front ends are given):
   trajectory.txt  estimated poses, KITTI format      gt.txt      the ground truth of the same frames
@@ -20,7 +25,7 @@ Check against evo: evo_ape kitti OUT/gt.txt OUT/trajectory.txt -a   (-as for Sim
 
 #[derive(clap::Args)]
 pub(super) struct VoArgs {
-    /// KITTI-format sequence folder
+    /// KITTI-format sequence folder, or a recording (MCAP file, video)
     seq_dir: PathBuf,
     /// Front end(s), comma-separated: lfast, fast, orb
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = [FrontEnd::Lfast])]
@@ -28,9 +33,21 @@ pub(super) struct VoArgs {
     /// Output directory (created if missing)
     #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
-    /// Use only the first N frames
-    #[arg(long, value_name = "N")]
-    frames: Option<usize>,
+    /// Use only the first N frames, or frames START..END (0-based, END excluded)
+    #[arg(long, value_name = "N|RANGE")]
+    frames: Option<crate::recording::FrameRange>,
+    /// Intrinsics (KITTI calib.txt: P0) for a recording without a CameraInfo topic, or to override it
+    #[arg(long, value_name = "FILE")]
+    calib: Option<PathBuf>,
+    /// MCAP input: the image topic (default: the file's one image topic)
+    #[arg(long, value_name = "NAME")]
+    topic: Option<String>,
+    /// Recordings: take every Nth frame
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    every: u64,
+    /// Recordings: times START..END in seconds from the first frame
+    #[arg(long, value_name = "RANGE")]
+    time: Option<crate::recording::TimeRange>,
     /// Ground-truth poses file (default: SEQ_DIR/poses.txt when present)
     #[arg(long, value_name = "FILE")]
     poses: Option<PathBuf>,
@@ -108,9 +125,7 @@ pub(super) fn run_vo(a: VoArgs) -> Result<bool, CliError> {
     let cfg = a.common.config()?;
     let (backend, gpu) = a.common.backend()?;
     let pool = a.common.pool()?;
-    if a.frames == Some(0) {
-        return Err(CliError::Usage("--frames must be at least 1".into()));
-    }
+    let range = a.frames.unwrap_or_default();
     let opts = VoOptions {
         features: FrontEnd::Lfast,
         backend,
@@ -118,7 +133,8 @@ pub(super) fn run_vo(a: VoArgs) -> Result<bool, CliError> {
         config: cfg,
         fast_threshold: a.fast_threshold,
         orb_features: a.orb_features,
-        frames: a.frames,
+        frames: range.end.map(|e| (e - range.start) as usize),
+        start: range.start as usize,
         poses: a.poses.clone(),
         gt_scale: !a.no_gt_scale,
         matching: MatchOptions {
@@ -142,13 +158,27 @@ pub(super) fn run_vo(a: VoArgs) -> Result<bool, CliError> {
     features.retain(|f| seen.insert(*f));
     let several = features.len() > 1;
     let mut rows = Vec::new();
+    let recording = crate::recording::format_of(&a.seq_dir).is_some();
+    if !recording && (a.topic.is_some() || a.every != 1 || a.time.is_some() || a.calib.is_some()) {
+        return Err(CliError::Usage("--topic, --every, --time and --calib are for recordings (MCAP, video)".into()));
+    }
+    let source = if recording { Some(recording::Source::new(&a)?) } else { None };
+    let mut ok = true;
     for f in features {
         let o = VoOptions { features: f, ..opts.clone() };
-        let run = pool.install(|| vo::run_sequence(&a.seq_dir, &o)).map_err(cli_err)?;
+        let run = match &source {
+            None => pool.install(|| vo::run_sequence(&a.seq_dir, &o)),
+            Some(src) => pool.install(|| src.run(&o)),
+        }
+        .map_err(cli_err)?;
         let dir = if several { a.out.join(f.to_string()) } else { a.out.clone() };
         let s = vo::write_outputs(&run, &dir).map_err(cli_err)?;
         if !a.common.quiet {
             println!("{}", line(&s, &dir));
+        }
+        if let Some(why) = &run.stopped {
+            eprintln!("lfast: {}: {why}", a.seq_dir.display());
+            ok = false;
         }
         rows.push(vo::SuiteRow { features: f, summary: s });
     }
@@ -158,7 +188,7 @@ pub(super) fn run_vo(a: VoArgs) -> Result<bool, CliError> {
         crate::io::write_atomic(&a.out.join("suite.md"), md.as_bytes())?;
         print!("{md}");
     }
-    Ok(true)
+    Ok(ok)
 }
 
 /// One line per run.

@@ -24,7 +24,7 @@ mod plot;
 
 pub use ate::{Align, Ate, Stats};
 pub use output::{Summary, write_outputs};
-pub use pipeline::{FrameRecord, FrontEnd, MatcherBackend, VoOptions, VoRun, run_sequence};
+pub use pipeline::{FrameRecord, FrontEnd, InputFrame, MatcherBackend, VoOptions, VoRun, run_frames, run_sequence};
 
 use nalgebra::{Matrix3, Vector3};
 use std::path::PathBuf;

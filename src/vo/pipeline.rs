@@ -43,8 +43,10 @@ pub struct VoOptions {
     pub fast_threshold: i32,
     /// Keypoints per frame of the ORB front end when `config.n_features` is 0.
     pub orb_features: u32,
-    /// Use only the first N frames.
+    /// Use only the first N frames (of those from [`VoOptions::start`] on).
     pub frames: Option<usize>,
+    /// Skip the frames before this one (the ground truth is taken from it on too).
+    pub start: usize,
     /// Ground-truth poses (default: `SEQ/poses.txt` when it exists).
     pub poses: Option<PathBuf>,
     /// Scale each step by the ground-truth translation norm (when poses exist).
@@ -73,6 +75,7 @@ impl Default for VoOptions {
             fast_threshold: 20,
             orb_features: 2000,
             frames: None,
+            start: 0,
             poses: None,
             gt_scale: true,
             matching: MatchOptions::default(),
@@ -132,7 +135,14 @@ pub struct VoRun {
     pub gt: Option<Vec<Pose>>,
     /// Per-frame records.
     pub records: Vec<FrameRecord>,
+    /// Why the frames ended early (a damaged recording): the run holds the
+    /// frames before it; `None` when every frame was read.
+    pub stopped: Option<String>,
 }
+
+/// One input frame of [`run_frames`]: its index in the sequence (the row of
+/// the ground truth), its name, and the image.
+pub type InputFrame = (usize, String, crate::image::Plane<u8>);
 
 const IMAGE_EXT: [&str; 7] = ["png", "jpg", "jpeg", "tif", "tiff", "pgm", "bmp"];
 
@@ -293,25 +303,53 @@ fn estimate(kp1: &[KeyPoint], kp2: &[KeyPoint], m: &[Match], calib: &Calib, o: &
 pub fn run_sequence(seq: &Path, o: &VoOptions) -> Result<VoRun, VoError> {
     validate(o)?;
     let mut frames = list_frames(seq)?;
+    let start = o.start.min(frames.len());
+    frames.drain(..start);
     if let Some(n) = o.frames {
         frames.truncate(n);
+    }
+    if frames.is_empty() {
+        return Err(VoError::Sequence {
+            path: seq.to_path_buf(),
+            reason: format!("no frame from frame {} on", o.start),
+        });
     }
     let calib = kitti::read_calib(&seq.join("calib.txt"))?;
     let poses_path = o.poses.clone().or_else(|| Some(seq.join("poses.txt")).filter(|p| p.exists()));
     let gt = match &poses_path {
         Some(p) => {
-            let mut g = kitti::read_poses(p)?;
-            if g.len() < frames.len() {
+            let g = kitti::read_poses(p)?;
+            if g.len() < start + frames.len() {
                 return Err(VoError::Sequence {
                     path: seq.to_path_buf(),
-                    reason: format!("{} has {} poses for {} frames", p.display(), g.len(), frames.len()),
+                    reason: format!("{} has {} poses for {} frames", p.display(), g.len(), start + frames.len()),
                 });
             }
-            g.truncate(frames.len());
             Some(g)
         }
         None => None,
     };
+    let images = frames.into_iter().enumerate().map(|(i, path)| {
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        Ok((start + i, name, crate::image::load_gray(&path)?))
+    });
+    run_frames(seq, images, calib, gt.as_deref(), o)
+}
+
+/// Runs monocular VO over `frames` with the intrinsics of `calib`; `gt`
+/// (indexed by the frames' indices) scales each step and is the ground truth
+/// of the run. A frame that is an `Err` ends the run: a [`VoError::Sequence`]
+/// (a damaged recording) is kept in [`VoRun::stopped`] with the frames
+/// before it, any other error is returned. `o.start` and `o.frames` are the
+/// caller's to apply.
+pub fn run_frames(
+    sequence: &Path,
+    frames: impl IntoIterator<Item = Result<InputFrame, VoError>>,
+    calib: Calib,
+    gt: Option<&[Pose]>,
+    o: &VoOptions,
+) -> Result<VoRun, VoError> {
+    validate(o)?;
     let ctx = gpu_context(o)?;
     let det = features(o, ctx.as_ref())?;
     let mut mat = match ctx {
@@ -325,16 +363,34 @@ pub fn run_sequence(seq: &Path, o: &VoOptions) -> Result<VoRun, VoError> {
             Err(e) => return Err(e.into()),
         },
     };
+    let gt_of = |index: usize| -> Result<Option<Pose>, VoError> {
+        match gt {
+            None => Ok(None),
+            Some(g) => g.get(index).copied().map(Some).ok_or_else(|| VoError::Sequence {
+                path: sequence.to_path_buf(),
+                reason: format!("the ground truth has {} poses; frame {index} has none", g.len()),
+            }),
+        }
+    };
 
-    let mut poses: Vec<Pose> = Vec::with_capacity(frames.len());
-    let mut records = Vec::with_capacity(frames.len());
+    let mut poses: Vec<Pose> = Vec::new();
+    let mut gt_used: Vec<Pose> = Vec::new();
+    let mut records = Vec::new();
     let mut prev: Option<(Vec<KeyPoint>, Vec<Descriptor>)> = None;
     let mut last_step: Option<(Matrix3<f64>, Vector3<f64>)> = None;
-    for (i, path) in frames.iter().enumerate() {
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut stopped = None;
+    for (i, frame) in frames.into_iter().enumerate() {
         let t = Instant::now();
-        let img = crate::image::load_gray(path)?;
+        let (index, name, img) = match frame {
+            Ok(f) => f,
+            Err(VoError::Sequence { reason, .. }) => {
+                stopped = Some(reason);
+                break;
+            }
+            Err(e) => return Err(e),
+        };
         let load_ms = ms(t);
+        let g = gt_of(index)?;
         let t = Instant::now();
         let (kps, desc) = det.detect_and_compute(&img)?;
         let detect_ms = ms(t);
@@ -375,8 +431,8 @@ pub fn run_sequence(seq: &Path, o: &VoOptions) -> Result<VoRun, VoError> {
                 }
             };
             last_step = Some((rot, dir));
-            let scale = match &gt {
-                Some(g) if o.gt_scale => (g[i].translation - g[i - 1].translation).norm(),
+            let scale = match (g, gt_used.last()) {
+                (Some(cur), Some(before)) if o.gt_scale => (cur.translation - before.translation).norm(),
                 _ => 1.0,
             };
             // T_w,cur = T_w,prev * T_cur<-prev^-1
@@ -384,20 +440,30 @@ pub fn run_sequence(seq: &Path, o: &VoOptions) -> Result<VoRun, VoError> {
             poses.push(poses[i - 1].compose(&rel.inverse()));
             rec.pose_ms = ms(t);
         } else {
-            poses.push(gt.as_ref().map_or(Pose::identity(), |g| g[0]));
+            poses.push(g.unwrap_or_else(Pose::identity));
+        }
+        if let Some(g) = g {
+            gt_used.push(g);
         }
         rec.total_ms = rec.detect_ms + rec.match_ms + rec.pose_ms;
         records.push(rec);
         prev = Some((kps, desc));
     }
+    if records.is_empty() {
+        return Err(VoError::Sequence {
+            path: sequence.to_path_buf(),
+            reason: stopped.unwrap_or_else(|| "no frame to run on".into()),
+        });
+    }
     Ok(VoRun {
-        sequence: seq.to_path_buf(),
+        sequence: sequence.to_path_buf(),
         options: o.clone(),
         detector_backend: det.backend_name(),
         matcher_backend: mat.backend(),
         calib,
         poses,
-        gt,
+        gt: gt.map(|_| gt_used),
         records,
+        stopped,
     })
 }
