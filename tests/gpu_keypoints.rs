@@ -283,7 +283,14 @@ fn corner_nms_breaks_ties_by_position() {
                 t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(lw, lh, &cands));
                 t::upload_level(&ctx, &b, &b.resp, l, &rmap);
                 for i in corner_nms::survivors(&cands, &resp, r, cfg.reject_edges) {
-                    let c = Corner { level: l as u32, x: cands[i][0], y: cands[i][1], response: resp[i], sub: [0, 0], fill: false };
+                    let c = Corner {
+                        level: l as u32,
+                        x: cands[i][0],
+                        y: cands[i][1],
+                        response: resp[i],
+                        sub: [0, 0],
+                        fill: false,
+                    };
                     want.push(bits(&corner_kp(&cfg, &c)));
                 }
             }
