@@ -9,13 +9,16 @@
 // absent). Frames FIRST..LAST (default: all of image_0).
 //
 // Pacing (--pace):
-//   lockstep (default)  after each frame, wait until LocalMapping has an empty
+//   lockstep (default)  LocalMapping is held while a frame is tracked (it
+//                       starts on the frame's keyframe once Track* returns);
+//                       then the driver waits until LocalMapping has an empty
 //                       queue and accepts keyframes again, LoopClosing has
 //                       processed its queue, and no global BA runs; only then
-//                       is the next frame fed. The mapping threads finish the
-//                       work a frame gave them before the next one, as on an
-//                       infinitely fast machine, so the result does not depend
-//                       on the machine's speed or load. Needs patch 0006.
+//                       is the next frame fed. Tracking, mapping and loop
+//                       detection take turns as if one thread did all the
+//                       work, and mapping always keeps up, so the result does
+//                       not depend on the machine's speed or load. Needs
+//                       patch 0006.
 //   free                frames fed as fast as tracking returns (monocular KITTI
 //                       fails this way: LocalMapping is still busy with the
 //                       initial map when tracking needs its next keyframes)
@@ -78,6 +81,7 @@
 #include "Atlas.h"
 #include "KeyFrame.h"
 #include "LocalMapping.h"
+#include "Lockstep.h"
 #include "LoopClosing.h"
 #include "Map.h"
 #include "System.h"
@@ -266,12 +270,15 @@ int main(int argc, char** argv) {
         r.frame = i;
         r.timestamp = times[i];
         size_t entries_before = tracker->mlRelativeFramePoses.size();
+        const bool lockstep = a.pace == "lockstep";
+        if (lockstep) ORB_SLAM3::gHoldLocalMapping = true;
         Clock::time_point t0 = Clock::now();
         if (a.stereo)
             slam.TrackStereo(left, right, r.timestamp);
         else
             slam.TrackMonocular(left, r.timestamp);
         r.track_ms = ms_since(t0);
+        if (lockstep) ORB_SLAM3::gHoldLocalMapping = false;
         r.state = tracker->mState;
         // after a reset mCurrentFrame is an empty Frame(): its N is not set
         const ORB_SLAM3::Frame& f = tracker->mCurrentFrame;
@@ -294,7 +301,7 @@ int main(int argc, char** argv) {
                  std::to_string(entries - entry_frame.size()) + " entries");
 
         Clock::time_point w0 = Clock::now();
-        if (a.pace == "lockstep") {
+        if (lockstep) {
             while (!mapping_idle(slam)) std::this_thread::sleep_for(std::chrono::microseconds(500));
         } else if (a.pace == "realtime" && i < last) {
             double gap = (times[i + 1] - times[i]) * 1e3 - r.track_ms;
