@@ -4,6 +4,8 @@
 #   KITTI 00 frames 0-199, monocular;
 #   KITTI 00 frames 0-99, stereo (the shared excerpt has right images for those);
 #   KITTI 01 frames 0-50, monocular, with a vocabulary trained without seq01;
+#   KITTI 00 frames 0-199, monocular again, paced at 10 Hz (upstream's
+#   real-time pacing, for reference: machine-dependent);
 # and prints the summary table (also OUT/summary.{md,csv,json}).
 #
 #   scripts/orbslam3/compare.sh [OUT_DIR] [RUNS]      (defaults: orbslam3-results, 5)
@@ -38,6 +40,7 @@ main() {
     "$here/run.sh" "$seq00" --sensor stereo --frames 0-99 --extractor both --runs "$runs" --out "$out" > /dev/null
     "$here/run.sh" "$seq01" --sensor mono --extractor both --runs "$runs" --out "$out" \
         --vocabulary without-seq01 > /dev/null
+    "$here/run.sh" "$seq00" --sensor mono --pace realtime --extractor both --runs "$runs" --out "$out" > /dev/null
     python3 "$here/results.py" summary "$out"
 }
 

@@ -211,20 +211,21 @@ def summary(args):
         die(f"no runs under {out} (*/run*/run.json)")
     groups = {}
     for r in runs:
-        key = (r.get("sequence", "?"), r.get("sensor", "?"), r.get("frames_range", "?"), r.get("extractor", "?"))
+        key = (r.get("sequence", "?"), r.get("sensor", "?"), r.get("frames_range", "?"), r.get("pace", "?"),
+               r.get("extractor", "?"))
         groups.setdefault(key, []).append(r)
     header = [
-        "sequence", "sensor", "frames", "extractor", "runs", "ATE RMSE m", "align", "tracked",
+        "sequence", "sensor", "frames", "pace", "extractor", "runs", "ATE RMSE m", "align", "tracked",
         "first tracked", "runs with resets", "keyframes", "map points", "keypoints/frame",
         "keypoints/frame (init)", "extract ms/frame", "extract ms (init)", "track ms/frame", "vocabulary",
     ]
     table = []
     records = []
-    for (seq, sensor, rng, ext), rs in sorted(groups.items()):
+    for (seq, sensor, rng, pace, ext), rs in sorted(groups.items()):
         ok = [r for r in rs if "frames" in r]
         n_frames = ok[0]["frames"] if ok else "?"
         row = [
-            seq, sensor, rng, ext, str(len(rs)),
+            seq, sensor, f"{ok[0]['first']}-{ok[0]['last']}" if ok else rng, pace, ext, str(len(rs)),
             spread([r.get("ate_rmse") for r in ok], "{:.3f}"),
             ok[0].get("align", "?") if ok else "?",
             spread([r.get("tracked") for r in ok], "{:.0f}") + f" of {n_frames}",
@@ -241,7 +242,7 @@ def summary(args):
         ]
         failed = [r for r in rs if "error" in r]
         table.append(row)
-        records.append({"key": dict(zip(header[:4], [seq, sensor, rng, ext])), "row": dict(zip(header, row)),
+        records.append({"key": dict(zip(header[:5], [seq, sensor, rng, pace, ext])), "row": dict(zip(header, row)),
                         "errors": [r["error"] for r in failed], "runs": rs})
     md = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     md += ["| " + " | ".join(row) + " |" for row in table]

@@ -108,12 +108,15 @@ main() {
     settings="$out/settings-$seq_name-$sensor.yaml"
     python3 "$here/results.py" settings "$seq" --sensor "$sensor" > "$settings"
     frames_label="${frames:-all}"
+    # one directory per case: sequence, sensor, frames, pacing (when not lockstep), extractor
+    case_name="$seq_name-$sensor-$frames_label"
+    [ "$pace" = lockstep ] || case_name="$case_name-$pace"
 
     # the extractors take turns, run by run, so that a change in the machine's
     # load falls on both
     declare -A next
     for ext in "${extractors[@]}"; do
-        group="$out/$seq_name-$sensor-${frames_label}-$ext"
+        group="$out/$case_name-$ext"
         mkdir -p "$group"
         # numbering continues after the runs already there
         k=0
@@ -124,9 +127,9 @@ main() {
         for ext in "${extractors[@]}"; do
             k=${next[$ext]}
             next[$ext]=$((k + 1))
-            d="$out/$seq_name-$sensor-${frames_label}-$ext/run$k"
+            d="$out/$case_name-$ext/run$k"
             mkdir -p "$d"
-            echo "== $seq_name $sensor ${frames_label} $ext run $k" >&2
+            echo "== $case_name $ext run $k" >&2
             t0=$(date +%s%N)
             status=0
             "$prefix/bin/orbslam3_kitti-$ext" "$voc" "$settings" "$seq" "$d" --sensor "$sensor" \
