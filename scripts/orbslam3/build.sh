@@ -28,7 +28,8 @@
 # ccache, every object file that does not include ORBextractor.h.
 #
 # Result (PREFIX/bin): orbslam3_kitti-orbslam3, orbslam3_kitti-lfast (the
-# KITTI driver of kitti_driver.cc against each variant), train_vocabulary.
+# KITTI driver of kitti_driver.cc against each variant), train_vocabulary,
+# and with both variants bench_extractor (the two extractors outside SLAM).
 #
 # ORB-SLAM3 is GPLv3: these builds, lfast linked in or not, are GPLv3 programs.
 # The patches applied are in scripts/orbslam3/patches/, one file per change,
@@ -291,6 +292,7 @@ build_variant() {
         die "ORB-SLAM3's cmake failed: $logs/cmake.log"
     ninja -C "$t/build" -j "$jobs" > "$logs/ninja.log" 2>&1 || die "ORB-SLAM3's build failed: $logs/ninja.log"
     # the driver (and, once, the vocabulary trainer) against this build
+    for_source "$prefix/build/$v/driver" "$here"
     cmake -S "$here" -B "$prefix/build/$v/driver" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" \
         -DORB_SLAM3_DIR="$t" -DPangolin_DIR="$prefix/pangolin/lib/cmake/Pangolin" \
         -DVARIANT="$v" "${deps[@]}" > "$logs/driver.log" 2>&1 || die "the driver's cmake failed: $logs/driver.log"
@@ -300,6 +302,35 @@ build_variant() {
         install -m 755 "$prefix/build/$v/driver/train_vocabulary" "$prefix/bin/train_vocabulary"
     fi
     stamp_set "build-$v" "$key"
+}
+
+# for_source DIR SRC: DIR, emptied first when it is a CMake build of another
+# source folder (a moved checkout or a second clone; cmake refuses those)
+for_source() {
+    local d="$1" src="$2"
+    if [ -f "$d/CMakeCache.txt" ] && ! grep -qxF "CMAKE_HOME_DIRECTORY:INTERNAL=$src" "$d/CMakeCache.txt"; then
+        rm -rf "$d"
+    fi
+    mkdir -p "$d"
+}
+
+# bench_extractor (bench_extractor.cpp): ORB-SLAM3's own ORBextractor,
+# compiled from the orbslam3 tree, against the installed lfast's, timed
+# outside SLAM on the same frames.
+build_bench() {
+    local t="$prefix/build/orbslam3/ORB_SLAM3" d="$prefix/build/bench" key
+    key="$(cat "$prefix/stamps/tree-orbslam3") $(cat "$prefix/stamps/lfast") $(hash_files "$here"/CMakeLists.txt "$here"/bench_extractor.cpp)"
+    if stamp_ok bench "$key" && [ -x "$prefix/bin/bench_extractor" ]; then
+        return
+    fi
+    log "bench_extractor"
+    for_source "$d" "$here"
+    cmake -S "$here" -B "$d" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" -DBENCH_EXTRACTOR=ON \
+        -DORB_SLAM3_DIR="$t" -Dlfast_DIR="$prefix/lfast/lib/cmake/lfast" > "$d/cmake.log" 2>&1 ||
+        die "bench_extractor's cmake failed: $d/cmake.log"
+    ninja -C "$d" -j "$jobs" > "$d/ninja.log" 2>&1 || die "bench_extractor's build failed: $d/ninja.log"
+    install -m 755 "$d/bench_extractor" "$prefix/bin/bench_extractor"
+    stamp_set bench "$key"
 }
 
 # The whole run sits in a function, read before it starts: editing this file
@@ -313,6 +344,7 @@ main() {
         prepare_tree "$v"
         build_variant "$v"
     done
+    [ "${#variants[@]}" = 2 ] && build_bench
     log "done in $(($(date +%s) - start)) s; ccache: $(ccache -s 2> /dev/null | grep -iE '^ *(hits|cache hit)' | head -1 | tr -s ' ' || true)"
     for v in "${variants[@]}"; do echo "$prefix/bin/orbslam3_kitti-$v"; done
 }
