@@ -117,6 +117,10 @@ protected:
         c.distribution = true;
         c.orientation_bins = 0;
         c.descriptor = LFAST_DESCRIPTOR_KIND_OPENCV;
+        // Corners stay on their L-FAST pixel: the sub-pixel snap to the Harris
+        // maximum helps lfast's own matching but costs ORB-SLAM3's stereo and
+        // monocular tracking (docs/orbslam.md, "Results").
+        c.snap_radius = 0;
         if (iniThFAST > 0 && c.n_features > 0) {
             // above 255 is refused by the validation, with the field's name
             c.fill_fast_ini = static_cast<uint32_t>(iniThFAST);

@@ -162,6 +162,13 @@ static void orbextractor_checks(const cv::Mat& img, const std::string& path) {
         gray = img;
     lfast::ORBextractor ex(300, 1.2f, 8, 20, 7, lfast::Backend::Cpu);
     CHECK(ex.GetLevels() == 8 && ex.GetScaleFactor() == 1.2f, "ORBextractor levels");
+    {
+        const lfast::Config c = ex.lfast().config();
+        CHECK(c.snap_radius == 0 && c.distribution && c.orientation_bins == 0 &&
+                  c.descriptor == LFAST_DESCRIPTOR_KIND_OPENCV && c.n_features == 300 && c.fill_fast_ini == 20 &&
+                  c.fill_fast_min == 7,
+              "ORBextractor's config (docs/orbslam.md): no snap, quadtree, continuous angle, cv2 descriptor, fill");
+    }
     std::vector<float> s = ex.GetScaleFactors(), is = ex.GetInverseScaleFactors(), s2 = ex.GetScaleSigmaSquares(),
                        is2 = ex.GetInverseScaleSigmaSquares();
     CHECK(s.size() == 8 && s[0] == 1.f && std::fabs(s[7] - std::pow(1.2f, 7.f)) < 1e-4f, "GetScaleFactors");
