@@ -7,13 +7,19 @@
 //!
 //! 1. per cell row: median rows -> D (plus the next band's first row,
 //!    recomputed), then
-//! 2. LSD gradient rows -> S, direction sector, M8 + cell histograms
+//! 2. LSD gradient rows -> M8 + cell histograms (S and the direction sector
+//!    are not kept: pass 4 computes them again from D, a few rows at a time)
 //! 3. Otsu and window statistics from the cell histograms (tiny), turned into
 //!    four integer thresholds on S per run of columns: S >= hi is STRONG, >= lo WEAK_STRONG, ...
-//! 4. per band of rows: NMS + classification into a ring of three padded class
-//!    rows, rules rows -> ruled classes and the list of WEAK pixels, then
+//! 4. per band of rows: gradient rows of D again into a ring of three padded
+//!    S and sector rows, NMS + classification into a ring of three padded class
+//!    rows, rules rows -> ruled classes in E and the list of WEAK pixels, then
 //!    hysteresis within the band
 //! 5. hysteresis across the bands' seams -> E
+//!
+//! So the only full planes are D and E (docs/pipeline.md, "Memory"): a plane of
+//! S (u32) and one of sectors would cost 5 bytes per pixel, more to fault in
+//! and stream through memory than the gradient costs to compute twice.
 
 use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use super::local_threshold::{BandHistograms, Cells};
@@ -343,12 +349,59 @@ pub struct EdgeScratch {
     pub denoised: Plane<u8>,
     /// E after [`edges_fused_into`].
     pub edges: Plane<u8>,
-    s: Vec<u32>,
-    sec: Vec<u8>,
     thresholds: Vec<Vec<Piece>>,
-    ruled: Plane<u8>,
     /// The window and cell layout of the last image size (levels keep their sizes from frame to frame).
     cells: Option<Cells>,
+}
+
+/// S and sector rows of D computed on demand into three slots (row y in
+/// slot y % 3), padded as [`classify_row`] reads them: column x at index
+/// x + 1, zeros outside the image, an all-zero S row above the first row and
+/// below the last. Classifying rows in order computes each gradient row once.
+struct GradientRing {
+    s: [Vec<u32>; 3],
+    sec: [Vec<u8>; 3],
+    /// The row each slot holds.
+    row: [Option<usize>; 3],
+    zeros: Vec<u32>,
+    m8: Vec<u8>,
+}
+
+impl GradientRing {
+    fn new(w: usize) -> Self {
+        Self {
+            s: std::array::from_fn(|_| vec![0; w + 2]),
+            sec: std::array::from_fn(|_| vec![0; w + 2]),
+            row: [None; 3],
+            zeros: vec![0; w + 2],
+            m8: vec![0; w],
+        }
+    }
+
+    /// Computes gradient row `y` of `d` into its slot unless it is there.
+    fn fill(&mut self, d: &Plane<u8>, y: usize) {
+        let k = y % 3;
+        if self.row[k] == Some(y) {
+            return;
+        }
+        let (w, h) = (d.width as usize, d.height as usize);
+        // y + 1 clamps to the last row
+        let below = d.row((y + 1).min(h - 1) as u32);
+        gradient_row(d.row(y as u32), below, &mut self.s[k][1..=w], &mut self.sec[k][1..=w], &mut self.m8);
+        self.row[k] = Some(y);
+    }
+
+    /// S of rows y - 1, y, y + 1 and the sectors of row y, padded.
+    fn rows(&mut self, d: &Plane<u8>, y: usize) -> (&[u32], &[u32], &[u32], &[u8]) {
+        let h = d.height as usize;
+        for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+            self.fill(d, yy);
+        }
+        let Self { s, sec, zeros, .. } = self;
+        let up = if y == 0 { &zeros[..] } else { &s[(y - 1) % 3][..] };
+        let down = if y + 1 == h { &zeros[..] } else { &s[(y + 1) % 3][..] };
+        (up, &s[y % 3], down, &sec[y % 3])
+    }
 }
 
 /// Rows per task of the NMS + classification + rules pass (each task
@@ -373,12 +426,11 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
         sc.edges = em.edges;
         return;
     }
-    let EdgeScratch { denoised: d, edges, s, sec, thresholds, ruled, cells: layout } = sc;
+    let EdgeScratch { denoised: d, edges, thresholds, cells: layout } = sc;
 
     // 1. and 2. per cell row, one task each: the band's median rows -> D (and
     //    the first row of the next band, recomputed, for the gradient's y + 1),
-    //    then its gradient rows -> S, the sector and the cell histograms of
-    //    M8. S and the sector in padded rows of w + 2 (see `classify_row`).
+    //    then its gradient rows -> the cell histograms of M8.
     let ratio16 = small_ratio(delta_num, delta_den);
     let median = |y: usize, out: &mut [u8]| {
         let up = img.row(y.saturating_sub(1) as u32);
@@ -398,15 +450,11 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
     }
     let layout = layout.as_ref().expect("set just above");
     d.reshape(img.width(), img.height());
-    s.resize(ws * h, 0);
-    sec.resize(ws * h, 0);
     let (cx, cy) = (&layout.cx, &layout.cy);
-    let cells: Vec<Vec<[u32; 256]>> = bands(s, ws, cy)
+    let cells: Vec<Vec<[u32; 256]>> = bands(&mut d.data, w, cy)
         .into_par_iter()
-        .zip(bands(sec, ws, cy))
-        .zip(bands(&mut d.data, w, cy))
         .enumerate()
-        .map(|(j, ((s_band, sec_band), d_band))| {
+        .map(|(j, d_band)| {
             let (y0, y1) = (cy[j] as usize, cy[j + 1] as usize);
             for (k, out) in d_band.chunks_mut(w).enumerate() {
                 median(y0 + k, out);
@@ -418,13 +466,11 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
             let d_band = &*d_band;
             let d_row = |y: usize| if y < y1 { &d_band[(y - y0) * w..(y - y0 + 1) * w] } else { &next[..] };
             let mut band = BandHistograms::new(cx);
-            let mut m8 = vec![0u8; w];
-            for (k, (s_row, sec_row)) in s_band.chunks_mut(ws).zip(sec_band.chunks_mut(ws)).enumerate() {
-                let y = y0 + k;
+            let (mut s_row, mut sec_row, mut m8) = (vec![0u32; w], vec![0u8; w], vec![0u8; w]);
+            for y in y0..y1 {
                 // y + 1 clamps to the last row
                 let below = if y + 1 < h { d_row(y + 1) } else { d_row(y) };
-                gradient_row(d_row(y), below, &mut s_row[1..=w], &mut sec_row[1..=w], &mut m8);
-                (s_row[0], s_row[w + 1]) = (0, 0);
+                gradient_row(d_row(y), below, &mut s_row, &mut sec_row, &mut m8);
                 band.add_row(cx, &m8);
             }
             band.finish()
@@ -466,32 +512,32 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
         }
     }
 
-    // 4. NMS + classification + rules, a band of rows per task: a ring of three
-    //    padded class rows (the band's first and last rows classify one row
-    //    beyond it), no class plane; lists the WEAK pixels for the flood.
-    let zeros = vec![0u32; ws];
-    let (s, sec, thresholds) = (&*s, &*sec, &*thresholds);
-    let row = |yy: usize| &s[yy * ws..(yy + 1) * ws];
-    let classify = |y: isize, out: &mut [u8]| {
-        if y < 0 || y >= h as isize {
-            out.fill(0);
-            return;
-        }
-        let y = y as usize;
-        let su = if y == 0 { &zeros[..] } else { row(y - 1) };
-        let sd = if y + 1 == h { &zeros[..] } else { row(y + 1) };
-        let pieces = &thresholds[win.row_window[y] as usize];
-        classify_row(su, row(y), sd, &sec[y * ws..(y + 1) * ws], pieces, out);
-        (out[0], out[w + 1]) = (0, 0);
-    };
-    ruled.reshape(img.width(), img.height());
+    // 4. NMS + classification + rules, a band of rows per task: the band's
+    //    gradient rows again, in a ring of three padded S and sector rows (the
+    //    band's first and last rows classify one row beyond it, which needs S
+    //    one row further), a ring of three padded class rows, no S, sector or
+    //    class plane; lists the WEAK pixels for the flood.
+    let (d, thresholds) = (&*d, &*thresholds);
+    edges.reshape(img.width(), img.height());
     let band_rows = BAND_ROWS.min(h);
-    let weak: Vec<Vec<(u32, u32)>> = ruled
+    let weak: Vec<Vec<(u32, u32)>> = edges
         .data
         .par_chunks_mut(band_rows * w)
         .enumerate()
         .map(|(b, out)| {
             let y0 = b * band_rows;
+            let mut grad = GradientRing::new(w);
+            let mut classify = |y: isize, out: &mut [u8]| {
+                if y < 0 || y >= h as isize {
+                    out.fill(0);
+                    return;
+                }
+                let y = y as usize;
+                let pieces = &thresholds[win.row_window[y] as usize];
+                let (su, s, sd, sec) = grad.rows(d, y);
+                classify_row(su, s, sd, sec, pieces, out);
+                (out[0], out[w + 1]) = (0, 0);
+            };
             let mut ring = [vec![0u8; ws], vec![0u8; ws], vec![0u8; ws]];
             classify(y0 as isize - 1, &mut ring[0]);
             classify(y0 as isize, &mut ring[1]);
@@ -511,8 +557,7 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
 
     // 5. hysteresis across the bands' seams (each band flooded itself in 4);
     //    E is the ruled plane afterwards
-    hysteresis::flood_seams(ruled, &weak, band_rows);
-    std::mem::swap(ruled, edges);
+    hysteresis::flood_seams(edges, &weak, band_rows);
     debug_assert!(edges.data.iter().all(|&v| v == 0 || v == EDGE));
 }
 
