@@ -44,21 +44,22 @@ pub fn reflect101(i: i32, len: i32) -> usize {
 /// The horizontal sums fit u16 because the weights sum to 256.
 pub fn gaussian_blur(src: &Plane<u8>, kernel: &[u32]) -> Plane<u8> {
     let mut out = Plane::new(src.width, src.height);
-    gaussian_blur_into(src, kernel, &mut Vec::new(), &mut out);
+    gaussian_blur_into(src, kernel, &mut out);
     out
 }
 
-/// [`gaussian_blur`] into reused buffers (`tmp` holds the horizontal pass).
-pub fn gaussian_blur_into(src: &Plane<u8>, kernel: &[u32], tmp: &mut Vec<u16>, out: &mut Plane<u8>) {
+/// [`gaussian_blur`] into a reused plane. The horizontal pass runs in bands
+/// of rows, so no plane of it is kept.
+pub fn gaussian_blur_into(src: &Plane<u8>, kernel: &[u32], out: &mut Plane<u8>) {
     out.reshape(src.width, src.height);
     if src.is_empty() {
         return;
     }
     match kernel.len() {
-        7 if is_symmetric(kernel) => blur_n::<7>(src, kernel.try_into().expect("length checked"), vrow7_sym, tmp, out),
-        7 => blur_n::<7>(src, kernel.try_into().expect("length checked"), vrow7, tmp, out),
-        5 => blur_n::<5>(src, kernel.try_into().expect("length checked"), vrow5, tmp, out),
-        3 => blur_n::<3>(src, kernel.try_into().expect("length checked"), vrow3, tmp, out),
+        7 if is_symmetric(kernel) => blur_n::<7>(src, kernel.try_into().expect("length checked"), vrow7_sym, out),
+        7 => blur_n::<7>(src, kernel.try_into().expect("length checked"), vrow7, out),
+        5 => blur_n::<5>(src, kernel.try_into().expect("length checked"), vrow5, out),
+        3 => blur_n::<3>(src, kernel.try_into().expect("length checked"), vrow3, out),
         _ => *out = blur_any(src, kernel),
     }
 }
@@ -149,19 +150,22 @@ dispatch! {
     }
 }
 
+/// Output rows per task of [`blur_n`]: each band computes the horizontal sums
+/// of its rows and the `N - 1` around them, so no plane of sums is kept
+/// (2 bytes per pixel; docs/pipeline.md, "Memory") for 6 rows in 64 done twice.
+const BAND_ROWS: usize = 64;
+
 /// `vrow`: the dispatched [`vrow`] for `N` taps.
 fn blur_n<const N: usize>(
     src: &Plane<u8>,
     kernel: &[u32; N],
     vrow: fn([&[u16]; N], &[u32; N], &mut [u8]),
-    tmp: &mut Vec<u16>,
     out: &mut Plane<u8>,
 ) {
     let (w, h) = (src.width as usize, src.height as usize);
     let r = N / 2;
     let k16: [u16; N] = kernel.map(|v| v as u16);
-    tmp.resize(w * h, 0);
-    tmp.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+    let hsum = |y: usize, row: &mut [u16]| {
         let s = src.row(y as u32);
         let tap = |x: usize| {
             kernel
@@ -185,14 +189,26 @@ fn blur_n<const N: usize>(
                 *o = tap(x);
             }
         }
-    });
-    let tmp = &*tmp;
-    out.data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        let t: [&[u16]; N] = std::array::from_fn(|i| {
-            let yy = reflect101(y as i32 + i as i32 - r as i32, h as i32);
-            &tmp[yy * w..(yy + 1) * w]
-        });
-        vrow(t, kernel, row);
+    };
+    // the vertical taps of output row y read the horizontal sums of these rows
+    let tap_row = |y: usize, i: usize| reflect101(y as i32 + i as i32 - r as i32, h as i32);
+    out.data.par_chunks_mut(BAND_ROWS * w).enumerate().for_each_init(Vec::new, |tmp: &mut Vec<u16>, (b, band)| {
+        let (y0, y1) = (b * BAND_ROWS, b * BAND_ROWS + band.len() / w);
+        // the rows the band reads: y0 - r ..= y1 - 1 + r, reflected; a range
+        let rows = (y0..y1).flat_map(|y| (0..N).map(move |i| tap_row(y, i)));
+        let (lo, hi) = rows.fold((usize::MAX, 0), |(lo, hi), yy| (lo.min(yy), hi.max(yy)));
+        tmp.resize((hi - lo + 1) * w, 0);
+        for (k, row) in tmp.chunks_mut(w).enumerate() {
+            hsum(lo + k, row);
+        }
+        let tmp = &*tmp;
+        for (k, row) in band.chunks_mut(w).enumerate() {
+            let t: [&[u16]; N] = std::array::from_fn(|i| {
+                let yy = tap_row(y0 + k, i) - lo;
+                &tmp[yy * w..(yy + 1) * w]
+            });
+            vrow(t, kernel, row);
+        }
     });
 }
 
@@ -240,7 +256,8 @@ mod tests {
 
     proptest::proptest! {
         #[test]
-        fn fast_paths_match_reference(w in 1u32..80, h in 1u32..20, seed in proptest::prelude::any::<u64>(), ks in 0usize..4) {
+        // heights up to 3 bands of rows and a few past (BAND_ROWS = 64)
+        fn fast_paths_match_reference(w in 1u32..80, h in proptest::prop_oneof![1u32..20, 60u32..200], seed in proptest::prelude::any::<u64>(), ks in 0usize..4) {
             let mut s = seed;
             let data: Vec<u8> = (0..w * h).map(|_| { s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407); (s >> 56) as u8 }).collect();
             let img = Plane::from_vec(w, h, data).unwrap();

@@ -174,8 +174,8 @@ impl Clone for CpuDetector {
     }
 }
 
-/// Per-frame buffers: pyramid levels, the fused edge path's buffers per level,
-/// and the smoothed levels with their blur scratch.
+/// Per-frame buffers: pyramid levels, the fused edge path's D and E per level,
+/// and the smoothed levels (in `detect_and_compute`, E's planes, lent).
 #[derive(Debug, Default)]
 struct Workspace {
     levels: Vec<Plane<u8>>,
@@ -186,7 +186,6 @@ struct Workspace {
 #[derive(Debug, Default)]
 pub(crate) struct Smoothing {
     levels: Vec<Plane<u8>>,
-    tmp: Vec<Vec<u16>>,
 }
 
 impl CpuDetector {
@@ -283,7 +282,14 @@ impl CpuDetector {
                 let desc = self.describe_opencv(&ws.levels[0], &kps);
                 return Ok((kps, desc));
             }
-            Ok(self.describe_in(&ws.levels, &corners, spec::LFAST_CENTRE, &mut ws.smooth))
+            // E is spent once the corners are found: its planes take the
+            // smoothed levels, so that no third plane per level is kept
+            // (docs/pipeline.md, "Memory")
+            let Workspace { levels, edges, smooth } = ws;
+            smooth.levels = edges.iter_mut().map(|e| std::mem::take(&mut e.edges)).collect();
+            let out = self.describe_in(levels, &corners, spec::LFAST_CENTRE, smooth);
+            edges.iter_mut().zip(smooth.levels.drain(..)).for_each(|(e, p)| e.edges = p);
+            Ok(out)
         })
     }
 
@@ -515,14 +521,11 @@ fn smooth_used_levels<'a>(
     let mut need = vec![false; levels.len()];
     used.for_each(|l| need[l as usize] = true);
     sm.levels.resize_with(levels.len(), Default::default);
-    sm.tmp.resize_with(levels.len(), Default::default);
-    levels.par_iter().zip(need).zip(sm.levels.par_iter_mut().zip(sm.tmp.par_iter_mut())).for_each(
-        |((lv, n), (out, tmp))| {
-            if n {
-                blur::gaussian_blur_into(lv, &blur::ORB_KERNEL, tmp, out);
-            }
-        },
-    );
+    levels.par_iter().zip(need).zip(sm.levels.par_iter_mut()).for_each(|((lv, n), out)| {
+        if n {
+            blur::gaussian_blur_into(lv, &blur::ORB_KERNEL, out);
+        }
+    });
     &sm.levels[..levels.len()]
 }
 
