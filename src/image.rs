@@ -258,8 +258,15 @@ pub fn load_gray(path: impl AsRef<Path>) -> Result<Plane<u8>> {
     let img_err = |source| Error::Image { path: path.to_path_buf(), source };
     let mut reader = image::ImageReader::open(path).map_err(io)?.with_guessed_format().map_err(io)?;
     reader.limits(decode_limits());
-    let img = reader.decode().map_err(img_err)?;
-    to_gray(&img)
+    match reader.decode().map_err(img_err)? {
+        // 8-bit gray (KITTI, EuRoC, TUM): the decoded buffer is the plane, no copy
+        image::DynamicImage::ImageLuma8(b) => {
+            let (w, h) = b.dimensions();
+            check_size(w, h)?;
+            Plane::from_vec(w, h, b.into_raw())
+        }
+        img => to_gray(&img),
+    }
 }
 
 /// Writes an 8-bit plane as a PNG.
