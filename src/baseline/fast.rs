@@ -91,8 +91,29 @@ fn corner_score(data: &[u8], centre: usize, pixel: &[isize; N], threshold: i32) 
     threshold.max(i32::from(a)).max(-i32::from(b)) - 1
 }
 
+/// Bit `k` set where circle pixel `k` (`0..16`) satisfies `pass`.
+#[inline]
+fn circle_mask(data: &[u8], centre: usize, pixel: &[isize; N], pass: impl Fn(i32) -> bool) -> u32 {
+    (0..16).fold(0, |m, k| m | (u32::from(pass(circle(data, centre, pixel, k))) << k))
+}
+
+/// [`has_run`] on a [`circle_mask`]: true iff the 16 bits, read cyclically,
+/// hold more than [`K`] consecutive ones. The mask is doubled so that every
+/// arc is a contiguous window; `t` keeps bit `i` where bits `i..i + 8` are all
+/// set, found by doubling windows (2, 4, 8, then the 9th bit), with no branch
+/// to mispredict (`tests::has_arc_equals_the_run_count`).
+#[inline]
+fn has_arc(mask: u32) -> bool {
+    let m = mask | (mask << 16);
+    let t = m & (m >> 1);
+    let t = t & (t >> 2);
+    let t = t & (t >> 4);
+    t & (m >> K) & 0xffff != 0
+}
+
 /// The cyclic run count of `FAST_t`: true iff more than [`K`] consecutive
-/// entries of the 25-long scan satisfy `pass`.
+/// entries of the 25-long scan satisfy `pass`. The reference of [`has_arc`].
+#[cfg_attr(not(test), allow(dead_code))]
 #[inline]
 fn has_run(data: &[u8], centre: usize, pixel: &[isize; N], pass: impl Fn(i32) -> bool) -> bool {
     let mut count = 0;
@@ -230,10 +251,10 @@ pub fn fast9(image: &Plane<u8>, threshold: i32, nonmax: bool) -> Vec<KeyPoint> {
                 let centre = i * width + j;
                 let v = i32::from(data[centre]);
                 let d = classes[k];
-                if d & 1 != 0 && has_run(data, centre, &pixel, |x| x < v - threshold) {
+                if d & 1 != 0 && has_arc(circle_mask(data, centre, &pixel, |x| x < v - threshold)) {
                     cornerpos.push(j);
                 }
-                if d & 2 != 0 && has_run(data, centre, &pixel, |x| x > v + threshold) {
+                if d & 2 != 0 && has_arc(circle_mask(data, centre, &pixel, |x| x > v + threshold)) {
                     cornerpos.push(j);
                 }
             });
@@ -356,6 +377,23 @@ mod tests {
             let patch: Vec<u8> = patch.iter().map(|&v| if spread == 0 { v } else { 128u8.wrapping_add(v >> (4 + spread)) }).collect();
             let pixel = make_offsets(7);
             prop_assert_eq!(corner_score(&patch, 24, &pixel, threshold), corner_score_opencv(&patch, 24, &pixel, threshold));
+        }
+    }
+
+    #[test]
+    fn has_arc_equals_the_run_count() {
+        // every 16-bit mask, as the circle of a 7x7 patch: pixel k dark (0) where bit k is set
+        let pixel = make_offsets(7);
+        for mask in 0u32..1 << 16 {
+            let mut patch = [255u8; 49];
+            for k in 0..16 {
+                if mask >> k & 1 != 0 {
+                    patch[24usize.wrapping_add_signed(pixel[k])] = 0;
+                }
+            }
+            let dark = |x: i32| x < 100;
+            assert_eq!(circle_mask(&patch, 24, &pixel, dark), mask);
+            assert_eq!(has_arc(mask), has_run(&patch, 24, &pixel, dark), "{mask:016b}");
         }
     }
 
