@@ -7,19 +7,22 @@
 //!
 //! 1. per cell row: median rows -> D (plus the next band's first row,
 //!    recomputed), then
-//! 2. LSD gradient rows -> M8 + cell histograms (S and the direction sector
-//!    are not kept: pass 4 computes them again from D, a few rows at a time)
+//! 2. LSD gradient rows -> M8 + cell histograms, and S and the direction
+//!    sector in padded planes on a small level (see [`KEEP_GRADIENT_MAX`])
 //! 3. Otsu and window statistics from the cell histograms (tiny), turned into
 //!    four integer thresholds on S per run of columns: S >= hi is STRONG, >= lo WEAK_STRONG, ...
-//! 4. per band of rows: gradient rows of D again into a ring of three padded
-//!    S and sector rows, NMS + classification into a ring of three padded class
+//! 4. per band of rows: S and sector rows from those planes, or on a large
+//!    level the gradient rows of D again into a ring of three padded S and
+//!    sector rows; NMS + classification into a ring of three padded class
 //!    rows, rules rows -> ruled classes in E and the list of WEAK pixels, then
 //!    hysteresis within the band
 //! 5. hysteresis across the bands' seams -> E
 //!
-//! So the only full planes are D and E (docs/pipeline.md, "Memory"): a plane of
-//! S (u32) and one of sectors would cost 5 bytes per pixel, more to fault in
-//! and stream through memory than the gradient costs to compute twice.
+//! So on a large level the only full planes are D and E (docs/pipeline.md,
+//! "Memory"): a plane of S (u32) and one of sectors would cost 5 bytes per
+//! pixel, more to fault in and stream through memory than the gradient costs
+//! to compute twice. A small level's planes stay in cache, where computing
+//! the gradient twice costs more than keeping them.
 
 use super::classify::{EDGE, NONE, STRONG, WEAK, WEAK_STRONG, WEAK_WEAK};
 use super::local_threshold::{BandHistograms, Cells};
@@ -349,16 +352,28 @@ pub struct EdgeScratch {
     pub denoised: Plane<u8>,
     /// E after [`edges_fused_into`].
     pub edges: Plane<u8>,
+    /// S and the sector in padded rows of w + 2, on a level of at most
+    /// [`KEEP_GRADIENT_MAX`] pixels; empty on a larger one.
+    s: Vec<u32>,
+    sec: Vec<u8>,
     thresholds: Vec<Vec<Piece>>,
     /// The window and cell layout of the last image size (levels keep their sizes from frame to frame).
     cells: Option<Cells>,
 }
 
-/// S and sector rows of D computed on demand into three slots (row y in
-/// slot y % 3), padded as [`classify_row`] reads them: column x at index
-/// x + 1, zeros outside the image, an all-zero S row above the first row and
-/// below the last. Classifying rows in order computes each gradient row once.
-struct GradientRing {
+/// Levels of at most this many pixels keep S and the sector as planes from
+/// pass 2 to pass 4 (5 bytes per pixel: 2.3 MB at KITTI's 1241x376, which
+/// fits in cache); larger ones compute the gradient rows again in pass 4
+/// (docs/pipeline.md, "Memory"). Outputs are the same either way.
+pub const KEEP_GRADIENT_MAX: usize = 1 << 19;
+
+/// S and sector rows as [`classify_row`] reads them, padded (column x at
+/// index x + 1, zeros outside the image, an all-zero S row above the first
+/// row and below the last): from the kept planes, or computed from D on
+/// demand into three slots (row y in slot y % 3), so that classifying rows in
+/// order computes each gradient row once.
+struct GradientRing<'a> {
+    planes: Option<(&'a [u32], &'a [u8])>,
     s: [Vec<u32>; 3],
     sec: [Vec<u8>; 3],
     /// The row each slot holds.
@@ -367,14 +382,16 @@ struct GradientRing {
     m8: Vec<u8>,
 }
 
-impl GradientRing {
-    fn new(w: usize) -> Self {
+impl<'a> GradientRing<'a> {
+    fn new(w: usize, planes: Option<(&'a [u32], &'a [u8])>) -> Self {
+        let ring = if planes.is_some() { 0 } else { w + 2 };
         Self {
-            s: std::array::from_fn(|_| vec![0; w + 2]),
-            sec: std::array::from_fn(|_| vec![0; w + 2]),
+            planes,
+            s: std::array::from_fn(|_| vec![0; ring]),
+            sec: std::array::from_fn(|_| vec![0; ring]),
             row: [None; 3],
             zeros: vec![0; w + 2],
-            m8: vec![0; w],
+            m8: vec![0; ring.saturating_sub(2)],
         }
     }
 
@@ -394,6 +411,13 @@ impl GradientRing {
     /// S of rows y - 1, y, y + 1 and the sectors of row y, padded.
     fn rows(&mut self, d: &Plane<u8>, y: usize) -> (&[u32], &[u32], &[u32], &[u8]) {
         let h = d.height as usize;
+        if let Some((s, sec)) = self.planes {
+            let ws = d.width as usize + 2;
+            let row = |yy: usize| &s[yy * ws..(yy + 1) * ws];
+            let up = if y == 0 { &self.zeros[..] } else { row(y - 1) };
+            let down = if y + 1 == h { &self.zeros[..] } else { row(y + 1) };
+            return (up, row(y), down, &sec[y * ws..(y + 1) * ws]);
+        }
         for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
             self.fill(d, yy);
         }
@@ -418,6 +442,19 @@ pub fn edges_fused(img: &Plane<u8>, delta_num: u32, delta_den: u32, alpha_pct: u
 /// [`edges_fused`] into reused buffers: D and E end up in `sc.denoised` and `sc.edges`.
 /// `img` is borrowed row by row (any stride), so a caller's frame needs no copy.
 pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha_pct: u32, sc: &mut EdgeScratch) {
+    edges_fused_keeping(img, delta_num, delta_den, alpha_pct, KEEP_GRADIENT_MAX, sc)
+}
+
+/// [`edges_fused_into`] with S and the sector kept as planes when the image
+/// has at most `keep_max` pixels (the tests run both ways on every size).
+fn edges_fused_keeping(
+    img: GrayView<'_>,
+    delta_num: u32,
+    delta_den: u32,
+    alpha_pct: u32,
+    keep_max: usize,
+    sc: &mut EdgeScratch,
+) {
     let (w, h) = (img.width() as usize, img.height() as usize);
     if w < 3 || h == 0 {
         // The row kernels need an interior; tiny images take the staged path.
@@ -426,11 +463,12 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
         sc.edges = em.edges;
         return;
     }
-    let EdgeScratch { denoised: d, edges, thresholds, cells: layout } = sc;
+    let EdgeScratch { denoised: d, edges, s, sec, thresholds, cells: layout } = sc;
 
     // 1. and 2. per cell row, one task each: the band's median rows -> D (and
     //    the first row of the next band, recomputed, for the gradient's y + 1),
-    //    then its gradient rows -> the cell histograms of M8.
+    //    then its gradient rows -> the cell histograms of M8, and on a small
+    //    level S and the sector in padded rows of w + 2 (see `classify_row`).
     let ratio16 = small_ratio(delta_num, delta_den);
     let median = |y: usize, out: &mut [u8]| {
         let up = img.row(y.saturating_sub(1) as u32);
@@ -450,11 +488,25 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
     }
     let layout = layout.as_ref().expect("set just above");
     d.reshape(img.width(), img.height());
+    let keep = w * h <= keep_max;
+    if keep {
+        s.resize(ws * h, 0);
+        sec.resize(ws * h, 0);
+    } else {
+        (*s, *sec) = (Vec::new(), Vec::new());
+    }
     let (cx, cy) = (&layout.cx, &layout.cy);
+    let n_bands = cy.len() - 1;
+    let s_bands: Vec<Option<&mut [u32]>> =
+        if keep { bands(s, ws, cy).into_iter().map(Some).collect() } else { (0..n_bands).map(|_| None).collect() };
+    let sec_bands: Vec<Option<&mut [u8]>> =
+        if keep { bands(sec, ws, cy).into_iter().map(Some).collect() } else { (0..n_bands).map(|_| None).collect() };
     let cells: Vec<Vec<[u32; 256]>> = bands(&mut d.data, w, cy)
         .into_par_iter()
+        .zip(s_bands)
+        .zip(sec_bands)
         .enumerate()
-        .map(|(j, d_band)| {
+        .map(|(j, ((d_band, mut s_band), mut sec_band))| {
             let (y0, y1) = (cy[j] as usize, cy[j + 1] as usize);
             for (k, out) in d_band.chunks_mut(w).enumerate() {
                 median(y0 + k, out);
@@ -466,11 +518,21 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
             let d_band = &*d_band;
             let d_row = |y: usize| if y < y1 { &d_band[(y - y0) * w..(y - y0 + 1) * w] } else { &next[..] };
             let mut band = BandHistograms::new(cx);
-            let (mut s_row, mut sec_row, mut m8) = (vec![0u32; w], vec![0u8; w], vec![0u8; w]);
+            // a large level's S and sector rows are dropped once counted
+            let scratch = if keep { 0 } else { w };
+            let (mut s_tmp, mut sec_tmp, mut m8) = (vec![0u32; scratch], vec![0u8; scratch], vec![0u8; w]);
             for y in y0..y1 {
                 // y + 1 clamps to the last row
                 let below = if y + 1 < h { d_row(y + 1) } else { d_row(y) };
-                gradient_row(d_row(y), below, &mut s_row, &mut sec_row, &mut m8);
+                let k = (y - y0) * ws;
+                let (s_row, sec_row) = match (s_band.as_deref_mut(), sec_band.as_deref_mut()) {
+                    (Some(sb), Some(secb)) => {
+                        (sb[k], sb[k + w + 1]) = (0, 0);
+                        (&mut sb[k + 1..=k + w], &mut secb[k + 1..=k + w])
+                    }
+                    _ => (&mut s_tmp[..], &mut sec_tmp[..]),
+                };
+                gradient_row(d_row(y), below, s_row, sec_row, &mut m8);
                 band.add_row(cx, &m8);
             }
             band.finish()
@@ -518,6 +580,7 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
     //    one row further), a ring of three padded class rows, no S, sector or
     //    class plane; lists the WEAK pixels for the flood.
     let (d, thresholds) = (&*d, &*thresholds);
+    let planes = keep.then_some((&s[..], &sec[..]));
     edges.reshape(img.width(), img.height());
     let band_rows = BAND_ROWS.min(h);
     let weak: Vec<Vec<(u32, u32)>> = edges
@@ -526,7 +589,7 @@ pub fn edges_fused_into(img: GrayView<'_>, delta_num: u32, delta_den: u32, alpha
         .enumerate()
         .map(|(b, out)| {
             let y0 = b * band_rows;
-            let mut grad = GradientRing::new(w);
+            let mut grad = GradientRing::new(w, planes);
             let mut classify = |y: isize, out: &mut [u8]| {
                 if y < 0 || y >= h as isize {
                     out.fill(0);

@@ -115,6 +115,9 @@ fn equals_the_staged_pipeline_on_real_images() {
         assert!(em.edges.data.iter().filter(|&&v| v == EDGE).count() > 1000, "{name}");
         assert_eq!(f.denoised, em.denoised, "{name}");
         assert_eq!(f.edges, em.edges, "{name}");
+        let mut sc = EdgeScratch::default();
+        edges_fused_keeping(img.view(), 1000, 10_000, 35, 0, &mut sc);
+        assert_eq!((&sc.denoised, &sc.edges), (&em.denoised, &em.edges), "{name}, S recomputed");
     }
 }
 
@@ -128,6 +131,14 @@ proptest::proptest! {
         let f = edges_fused(&img, num, 10_000, alpha);
         proptest::prop_assert_eq!(&f.denoised, &em.denoised);
         proptest::prop_assert_eq!(&f.edges, &em.edges);
+        // the other way of getting S (planes kept on these small images, so the
+        // ring of recomputed rows), into the same buffers
+        let mut sc = EdgeScratch::default();
+        for keep_max in [0, usize::MAX, 0] {
+            edges_fused_keeping(img.view(), num, 10_000, alpha, keep_max, &mut sc);
+            proptest::prop_assert_eq!(&sc.denoised, &em.denoised);
+            proptest::prop_assert_eq!(&sc.edges, &em.edges);
+        }
     }
 }
 
@@ -143,5 +154,8 @@ proptest::proptest! {
         let f = edges_fused(&img, 1000, 10_000, alpha);
         proptest::prop_assert_eq!(&f.denoised, &em.denoised);
         proptest::prop_assert_eq!(&f.edges, &em.edges);
+        let mut sc = EdgeScratch::default();
+        edges_fused_keeping(img.view(), 1000, 10_000, alpha, 0, &mut sc);
+        proptest::prop_assert_eq!(&sc.edges, &em.edges);
     }
 }
