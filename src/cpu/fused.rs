@@ -574,11 +574,12 @@ fn edges_fused_keeping(
         }
     }
 
-    // 4. NMS + classification + rules, a band of rows per task: the band's
-    //    gradient rows again, in a ring of three padded S and sector rows (the
-    //    band's first and last rows classify one row beyond it, which needs S
-    //    one row further), a ring of three padded class rows, no S, sector or
-    //    class plane; lists the WEAK pixels for the flood.
+    // 4. NMS + classification + rules, a band of rows per task: S and sector
+    //    rows from the kept planes or, on a large level, the band's gradient
+    //    rows again in a ring of three padded rows (the band's first and last
+    //    rows classify one row beyond it, which needs S one row further); a
+    //    ring of three padded class rows, no class plane; lists the WEAK
+    //    pixels for the flood.
     let (d, thresholds) = (&*d, &*thresholds);
     let planes = keep.then_some((&s[..], &sec[..]));
     edges.reshape(img.width(), img.height());
