@@ -175,7 +175,7 @@ impl Clone for CpuDetector {
 }
 
 /// Per-frame buffers: pyramid levels, the fused edge path's D and E per level,
-/// and the smoothed levels (in `detect_and_compute`, E's planes, lent).
+/// and the smoothed levels (in `detect_and_compute`, E's planes, borrowed).
 #[derive(Debug, Default)]
 struct Workspace {
     levels: Vec<Plane<u8>>,
