@@ -258,8 +258,13 @@ pub fn load_gray(path: impl AsRef<Path>) -> Result<Plane<u8>> {
     let img_err = |source| Error::Image { path: path.to_path_buf(), source };
     let mut reader = image::ImageReader::open(path).map_err(io)?.with_guessed_format().map_err(io)?;
     reader.limits(decode_limits());
-    match reader.decode().map_err(img_err)? {
-        // 8-bit gray (KITTI, EuRoC, TUM): the decoded buffer is the plane, no copy
+    into_gray(reader.decode().map_err(img_err)?)
+}
+
+/// [`to_gray`] of an image the caller gives up: an 8-bit gray one (KITTI,
+/// EuRoC, TUM frames) becomes the plane without a copy.
+pub fn into_gray(img: image::DynamicImage) -> Result<Plane<u8>> {
+    match img {
         image::DynamicImage::ImageLuma8(b) => {
             let (w, h) = b.dimensions();
             check_size(w, h)?;

@@ -344,6 +344,11 @@ fn bands<'a, T>(data: &'a mut [T], w: usize, cuts: &[u32]) -> Vec<&'a mut [T]> {
     out
 }
 
+/// [`bands`] of a kept plane, or one `None` per band when it is not kept.
+fn kept_bands<'a, T>(keep: bool, data: &'a mut [T], w: usize, cuts: &[u32]) -> Vec<Option<&'a mut [T]>> {
+    if keep { bands(data, w, cuts).into_iter().map(Some).collect() } else { (1..cuts.len()).map(|_| None).collect() }
+}
+
 /// Buffers of the fused path, reused from frame to frame: allocating them per
 /// frame cost more in page faults than the passes themselves.
 #[derive(Clone, Debug, Default)]
@@ -496,11 +501,7 @@ fn edges_fused_keeping(
         (*s, *sec) = (Vec::new(), Vec::new());
     }
     let (cx, cy) = (&layout.cx, &layout.cy);
-    let n_bands = cy.len() - 1;
-    let s_bands: Vec<Option<&mut [u32]>> =
-        if keep { bands(s, ws, cy).into_iter().map(Some).collect() } else { (0..n_bands).map(|_| None).collect() };
-    let sec_bands: Vec<Option<&mut [u8]>> =
-        if keep { bands(sec, ws, cy).into_iter().map(Some).collect() } else { (0..n_bands).map(|_| None).collect() };
+    let (s_bands, sec_bands) = (kept_bands(keep, s, ws, cy), kept_bands(keep, sec, ws, cy));
     let cells: Vec<Vec<[u32; 256]>> = bands(&mut d.data, w, cy)
         .into_par_iter()
         .zip(s_bands)

@@ -5,7 +5,7 @@
 
 use super::wire::ImageMsg;
 use crate::error::{Error, Result};
-use crate::image::{Plane, check_size, decode_limits, luma_bt601, to_gray};
+use crate::image::{Plane, check_size, decode_limits, into_gray, luma_bt601};
 
 /// The raw encodings taken, in the order the errors list them.
 pub const RAW_ENCODINGS: &str =
@@ -100,7 +100,7 @@ fn compressed(format: &str, data: &[u8]) -> Result<Plane<u8>> {
     let img = reader
         .decode()
         .map_err(|e| Error::Image { path: std::path::PathBuf::from(format!("{format} image")), source: e })?;
-    to_gray(&img)
+    into_gray(img)
 }
 
 /// The gray plane of an image message.
