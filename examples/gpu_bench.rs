@@ -1,7 +1,8 @@
 //! GPU timings on real frames: per-pass times from timestamp queries,
 //! single-frame latency (upload -> keypoints + descriptors in host memory),
 //! the host side of the readback alone (a mapped staging buffer -> `Frame`),
-//! and sustained throughput with frames in flight through the staging ring.
+//! and sustained throughput with frames in flight through the staging ring;
+//! first the workspace's size (`lfast::gpu::workspace_report`).
 //!
 //! ```text
 //! cargo run --release --example gpu_bench -- ../shared/data/kitti/seq01_000000-000050/image_0 --frames 50
@@ -89,6 +90,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let ctx = GpuContext::new(&GpuOptions::default())?;
     println!("adapter: {} ({:?}), {} frames of {w}x{h}, ring {ring}", ctx.info.name, ctx.info.backend, imgs.len());
+    let report = lfast::gpu::workspace_report(&Config::default(), w, h)?;
+    let (largest, largest_bytes) = report.largest();
+    println!(
+        "workspace: {:.1} MB, {:.1} bytes per pixel; largest buffer `{largest}` {:.1} MB",
+        report.total() as f64 / 1e6,
+        report.bytes_per_pixel(),
+        largest_bytes as f64 / 1e6
+    );
     // per-pass times: a detector that records timestamp queries
     let prof = GpuDetector::with_options(
         ctx.clone(),
@@ -218,9 +227,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("mean keypoints per frame: {:.1}", kps as f64 / imgs.len() as f64);
     if let Some(p) = json {
         let s = format!(
-            "{{\"adapter\": \"{}\", \"frames\": {}, \"width\": {w}, \"height\": {h}, \"latency_ms\": {l:.4}, \"readback_host_ms\": {host_ms:.4}, \"gpu_only_ms\": {gpu_only:.4}, \"encode_ms\": {enc_ms:.4}, \"fps\": {fps:.2}, \"gpu_sum_ms\": {gpu:.4}, \"passes_ms\": {{{}}}}}\n",
+            "{{\"adapter\": \"{}\", \"frames\": {}, \"width\": {w}, \"height\": {h}, \"latency_ms\": {l:.4}, \"readback_host_ms\": {host_ms:.4}, \"gpu_only_ms\": {gpu_only:.4}, \"encode_ms\": {enc_ms:.4}, \"fps\": {fps:.2}, \"gpu_sum_ms\": {gpu:.4}, \"workspace_bytes\": {}, \"largest_buffer_bytes\": {largest_bytes}, \"passes_ms\": {{{}}}}}\n",
             ctx.info.name,
             imgs.len(),
+            report.total(),
             rows.join(", ")
         );
         std::fs::write(p, s)?;

@@ -1,7 +1,8 @@
 // SPEC 8: the L-FAST corner test on the edge map (paper 3.2, Steps 1-5).
 // Mirrors src/cpu/lfast.rs. `edges` (+ `mask` when P.use_mask == 1) ->
 // `cand` (1 = candidate, 0 otherwise; column-packed, common.wgsl pk_word;
-// cleared by the pass's prepare), and the candidate list: every candidate's
+// zeroed by `windows`: it shares its memory with `classes`, src/gpu/footprint.rs),
+// and the candidate list: every candidate's
 // atlas index appended to `cand_list` in no particular order, counted in
 // counters[CANDS], and the indirect args over it (entry `cand_args`), which
 // response.wgsl and corner_nms.wgsl dispatch over. (cand_list.wgsl builds the
@@ -10,8 +11,8 @@
 // itself runs on the workgroup's compacted edge pixels (see main).
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/lfast.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
-// Races: windows stores edge_bits[tile_word(l, x, tile)] from the invocation
-// of column x of that tile only, and its edge-list entries into the range its
+// Races: windows stores edge_bits[tile_word(l, x, tile)] and zeroes the `cand`
+// words of column x of that tile from the invocation of column x only, and its edge-list entries into the range its
 // workgroup reserved (one atomicAdd on counters[EDGES] by lane 0, lanes' offsets
 // from an atomicAdd on the workgroup's count); main sets candidate bits with
 // atomicOr (several pixels share a word of `cand`) and takes its cand_list slot
@@ -176,7 +177,10 @@ fn window_nibble(top: u32, last: u32, l: u32, g: i32, k: i32, h: u32) -> u32 {
 fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = quad_span(wg, li);
     var rows = vec2<u32>(0u);
-    if (span.y < span.z) { rows = walk_windows(span); }
+    if (span.y < span.z) {
+        clear_cand(span);
+        rows = walk_windows(span);
+    }
     // The tested rows' list entries, reserved once per workgroup: an atomic
     // per entry on the one counter (tens of thousands a KITTI frame, its
     // cache line bouncing between the cores) cost lavapipe ~0.2 ms more.
@@ -202,6 +206,19 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
         r &= r - 1u;
         edge_list[at] = base + (k & 15u) * w + 2u + (k >> 4u);
         at++;
+    }
+}
+
+// Zeroes the words of `cand` of the quad walk `span` (quad_span), before
+// `main` sets the candidates' bytes: the walks of the tile list cover every
+// word of every level once.
+fn clear_cand(span: vec4<u32>) {
+    let l = span.w;
+    let end = min(span.x + 4u, lw(l));
+    for (var x = span.x; x < end; x++) {
+        for (var y = span.y; y < span.z; y += 4u) {
+            atomicStore(&cand[pk_word(l, x, y)], 0u);
+        }
     }
 }
 

@@ -225,6 +225,22 @@ fn backends_and_adapters() {
     assert!(o.status.success(), "{}", show(&o));
     let s = stdout(&o);
     assert!(s.contains("GPU adapters found") && s.contains("rayon threads") && s.contains("avx2"), "{s}");
+    // --size: the workspace of each size, computed without a GPU; a size that does not fit
+    // wgpu's defaults names the limit; a malformed size is a usage error
+    let o = lfast(&[&"info", &"--size", &"1241x376,4000x3000"]);
+    assert!(o.status.success(), "{}", show(&o));
+    let s = stdout(&o);
+    for part in [
+        "GPU workspace for 1241x376: ",
+        "bytes per pixel), largest buffer `",
+        "GPU workspace for 4000x3000: ",
+        "does not fit: GPU limits: a 4000x3000 frame needs storage buffers of 148596868 bytes",
+    ] {
+        assert!(s.contains(part), "{part} not in {s}");
+    }
+    let o = lfast(&[&"info", &"--size", &"1241by376"]);
+    assert_eq!(o.status.code(), Some(2), "{}", show(&o));
+    assert!(stderr(&o).contains("`1241by376` is not a frame size WxH"), "{}", show(&o));
 
     // with a GPU (lavapipe in CI, where REQUIRE_GPU=1 makes its absence a failure):
     // the GPU backend writes the same features as the CPU

@@ -149,6 +149,13 @@ fn check_hysteresis(ctx: &GpuContext, pass: &HysteresisPass, b: &Buffers, planes
     }
 }
 
+/// The buffers of a `w x h` frame, the mask plane allocated (`check_lfast` uploads masks).
+fn mask_buffers(ctx: &GpuContext, cfg: &Config, w: u32, h: u32) -> lfast::Result<Buffers> {
+    let mut b = Buffers::new(&ctx.device, cfg, w, h)?;
+    b.allocate_mask(&ctx.device);
+    Ok(b)
+}
+
 /// The candidates of level `l` of `cand`, in raster order.
 fn gpu_candidates(ctx: &GpuContext, b: &Buffers, l: usize) -> Vec<[u32; 2]> {
     let (w, _) = b.layout.sizes[l];
@@ -306,7 +313,7 @@ fn rules_literal_case() {
         0, WEAK_STRONG, 0, 0, 0, WEAK_STRONG,
         WEAK_WEAK, 0, WEAK, WEAK_STRONG, WEAK_WEAK, 0,
     ]);
-    let b = Buffers::new(&ctx.device, &cfg, 6, 3).unwrap();
+    let b = mask_buffers(&ctx, &cfg, 6, 3).unwrap();
     poison(&ctx, &b.ruled, 9);
     t::upload_packed(&ctx, &b, &b.classes, 0, &c);
     t::run(&ctx, &pass, &b).unwrap();
@@ -341,7 +348,7 @@ fn rules_match_cpu_on_random_classes() {
     ];
     for (w, h, levels) in sizes {
         let cfg = Config { n_levels: levels, ..Config::default() };
-        let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
+        let b = mask_buffers(&ctx, &cfg, w, h).unwrap();
         poison(&ctx, &b.ruled, 9);
         let planes: Vec<Plane<u8>> = b.layout.sizes.iter().map(|&(lw, lh)| random_classes(lw, lh, &mut rng)).collect();
         for (l, p) in planes.iter().enumerate() {
@@ -368,7 +375,7 @@ fn rules_and_hysteresis_match_cpu_on_real_images() {
     let hp = HysteresisPass::new(&ctx.device);
     let cfg = Config { n_levels: 3, ..Config::default() };
     for (name, img) in real_images() {
-        let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
+        let b = mask_buffers(&ctx, &cfg, img.width, img.height).unwrap();
         let levels = t::cpu_levels(&cfg, &img);
         let ems: Vec<_> = levels.iter().map(|p| edge_map(p, &cfg)).collect();
         for (l, em) in ems.iter().enumerate() {
@@ -394,7 +401,7 @@ fn hysteresis_literal_case() {
     let Some(ctx) = t::context() else { return };
     let pass = HysteresisPass::new(&ctx.device);
     let cfg = Config { n_levels: 1, ..Config::default() };
-    let b = Buffers::new(&ctx.device, &cfg, 5, 3).unwrap();
+    let b = mask_buffers(&ctx, &cfg, 5, 3).unwrap();
     // the doc example on row 0; a diagonal WEAK chain reaching STRONG on rows
     // 1-2; an isolated WEAK and an isolated STRONG
     #[rustfmt::skip]
@@ -420,7 +427,7 @@ fn hysteresis_matches_cpu_on_random_planes() {
     let mut rng = XorRng::new(11);
     for (w, h, levels) in [(37, 29, 3), (130, 75, 4), (17, 1, 1), (1, 1, 1), (1, 40, 2), (200, 150, 3)] {
         let cfg = Config { n_levels: levels, ..Config::default() };
-        let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
+        let b = mask_buffers(&ctx, &cfg, w, h).unwrap();
         // from sparse to above the percolation threshold (one giant component)
         for (active, strong_in) in [(20, 10), (45, 40), (60, 300), (75, 2000), (100, 5000)] {
             let planes: Vec<Plane<u8>> =
@@ -440,7 +447,7 @@ fn hysteresis_long_snakes_and_spirals() {
     // A 1-pixel-wide spiral covering a 128x128 image, seeded at its inner end
     // (8000+ pixels), and the same seeded at the outer end.
     let cfg = Config { n_levels: 1, ..Config::default() };
-    let b = Buffers::new(&ctx.device, &cfg, 128, 128).unwrap();
+    let b = mask_buffers(&ctx, &cfg, 128, 128).unwrap();
     let (sp, path) = spiral(128, 128);
     assert!(path.len() > 8000, "{}", path.len());
     assert_eq!(sp.data.iter().filter(|&&v| v == WEAK).count(), path.len(), "the spiral never crosses itself");
@@ -458,7 +465,7 @@ fn hysteresis_long_snakes_and_spirals() {
     // level 0 (~15000 pixels), spirals on the other levels (seeded inside),
     // one of them cut in two so only the seeded half is edge.
     let cfg = Config { n_levels: 4, ..Config::default() };
-    let b = Buffers::new(&ctx.device, &cfg, 200, 150).unwrap();
+    let b = mask_buffers(&ctx, &cfg, 200, 150).unwrap();
     let mut planes = Vec::new();
     for (l, &(w, h)) in b.layout.sizes.iter().enumerate() {
         let (mut p, path) = if l == 0 { snake(w, h) } else { spiral(w, h) };
@@ -478,7 +485,7 @@ fn hysteresis_long_snakes_and_spirals() {
     // tile row: the components are long and never touch.
     let (w, h) = (150u32, 100u32);
     let cfg = Config { n_levels: 2, ..Config::default() };
-    let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
+    let b = mask_buffers(&ctx, &cfg, w, h).unwrap();
     let mut planes = Vec::new();
     for &(lw, lh) in &b.layout.sizes {
         let mut p = Plane::<u8>::new(lw, lh);
@@ -521,7 +528,7 @@ mod prop {
             let Some(ctx) = t::context() else { return Ok(()) };
             let pass = HysteresisPass::new(&ctx.device);
             let cfg = Config { n_levels: levels, ..Config::default() };
-            let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
+            let b = mask_buffers(&ctx, &cfg, w, h).unwrap();
             let mut rng = XorRng::new(seed);
             let planes: Vec<Plane<u8>> =
                 b.layout.sizes.iter().map(|&(lw, lh)| random_ruled(lw, lh, active, strong_in, &mut rng)).collect();
@@ -556,13 +563,13 @@ fn lfast_literal_l_corner() {
     for mode in [Mode::Paper, Mode::Branch] {
         // support 4 (SPEC 8's): the hand-computed answer is the corner alone
         let cfg = Config { mode, support: 4, border: 7, n_levels: 1, ..Config::default() };
-        let b = Buffers::new(&ctx.device, &cfg, 31, 31).unwrap();
+        let b = mask_buffers(&ctx, &cfg, 31, 31).unwrap();
         let n = check_lfast(&ctx, &pass, &cfg, &b, std::slice::from_ref(&e), None, "L");
         assert_eq!(gpu_candidates(&ctx, &b, 0), vec![[15, 15]], "{mode:?}");
         assert_eq!(n, 1);
         // border 16 leaves no pixel of a 31x31 level
         let cfg = Config { border: 16, ..cfg };
-        let b = Buffers::new(&ctx.device, &cfg, 31, 31).unwrap();
+        let b = mask_buffers(&ctx, &cfg, 31, 31).unwrap();
         assert_eq!(check_lfast(&ctx, &pass, &cfg, &b, std::slice::from_ref(&e), None, "L border 16"), 0);
     }
 }
@@ -582,7 +589,7 @@ fn lfast_matches_cpu_on_real_edge_maps() {
         let masks: Vec<Plane<u8>> = edges.iter().map(|e| random_mask(e.width, e.height, &mut rng)).collect();
         for cfg in lfast_configs() {
             let cfg = Config { n_levels: 4, ..cfg };
-            let b = Buffers::new(&ctx.device, &cfg, img.width, img.height).unwrap();
+            let b = mask_buffers(&ctx, &cfg, img.width, img.height).unwrap();
             total += check_lfast(&ctx, &pass, &cfg, &b, &edges, None, name);
             check_lfast(&ctx, &pass, &cfg, &b, &edges, Some(&masks), name);
         }
@@ -599,7 +606,7 @@ fn lfast_matches_cpu_on_random_edge_maps() {
     for (w, h, levels) in [(37, 29, 3), (130, 75, 4), (17, 1, 1), (1, 1, 1), (15, 15, 1), (16, 40, 2), (64, 64, 3)] {
         for cfg in lfast_configs() {
             let cfg = Config { n_levels: levels, ..cfg };
-            let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
+            let b = mask_buffers(&ctx, &cfg, w, h).unwrap();
             let edges: Vec<Plane<u8>> = b.layout.sizes.iter().map(|&(lw, lh)| random_edges(lw, lh, &mut rng)).collect();
             let masks: Vec<Plane<u8>> = b.layout.sizes.iter().map(|&(lw, lh)| random_mask(lw, lh, &mut rng)).collect();
             total += check_lfast(&ctx, &pass, &cfg, &b, &edges, None, &format!("random {w}x{h}"));
@@ -624,7 +631,7 @@ fn lfast_matches_cpu_on_every_circle_mask() {
     let mut rng = XorRng::new(3);
     for mode in [Mode::Branch, Mode::Paper] {
         let cfg = Config { mode, border: 7, n_levels: 1, support: 2 + rng.below(4), ..Config::default() };
-        let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
+        let b = mask_buffers(&ctx, &cfg, w, h).unwrap();
         for batch in 0..(65536 / (cols * rows)) {
             let mut e = Plane::<u8>::new(w, h);
             for v in e.data.iter_mut() {

@@ -1,10 +1,60 @@
-//! `lfast info`: GPU adapters, the one chosen and its limits, the CPU fallback.
+//! `lfast info`: GPU adapters, the one chosen and its limits, the CPU fallback,
+//! and with `--size` the GPU workspace of a frame size.
 
 use super::CliError;
-use crate::gpu::{AutoChoice, GpuContext, GpuOptions, auto_choice, is_hardware, list_adapters};
+use crate::config::Config;
+use crate::gpu::{AutoChoice, GpuContext, GpuOptions, auto_choice, is_hardware, list_adapters, workspace_report};
+use std::path::Path;
 
-/// Prints what this machine offers; `adapter` as `--adapter`.
-pub(super) fn run(adapter: Option<String>) -> Result<bool, CliError> {
+/// `WxH` (e.g. `3840x2160`) as `(width, height)`.
+pub(super) fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("`{s}` is not a frame size WxH, e.g. 3840x2160");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h) = (w.trim().parse::<u32>().map_err(|_| bad())?, h.trim().parse::<u32>().map_err(|_| bad())?);
+    if w == 0 || h == 0 {
+        return Err(format!("`{s}`: width and height must be at least 1"));
+    }
+    Ok((w, h))
+}
+
+/// Megabytes (10^6 bytes) with one decimal.
+fn mb(bytes: u64) -> String {
+    format!("{:.1} MB", bytes as f64 / 1e6)
+}
+
+/// Prints the GPU workspace of each size under `cfg`, and whether it fits
+/// wgpu's default limits and `limits` (the opened adapter's) when given.
+fn print_workspaces(cfg: &Config, sizes: &[(u32, u32)], limits: Option<&crate::wgpu::Limits>) -> Result<(), CliError> {
+    for &(w, h) in sizes {
+        let r = workspace_report(cfg, w, h)?;
+        let (name, largest) = r.largest();
+        println!(
+            "GPU workspace for {w}x{h}: {} ({:.1} bytes per pixel), largest buffer `{name}` {}; storage bindings up to {}",
+            mb(r.total()),
+            r.bytes_per_pixel(),
+            mb(largest),
+            mb(r.largest_storage)
+        );
+        let verdict = |l: &crate::wgpu::Limits| match r.fits(l) {
+            Ok(()) => "fits".to_string(),
+            Err(e) => format!("does not fit: {e}"),
+        };
+        println!("  wgpu's default limits: {}", verdict(&crate::wgpu::Limits::default()));
+        if let Some(l) = limits {
+            println!("  this adapter's limits: {}", verdict(l));
+        }
+    }
+    Ok(())
+}
+
+/// Prints what this machine offers; `adapter` as `--adapter`; the GPU
+/// workspace of each of `sizes` under the config file `config` (or the default).
+pub(super) fn run(adapter: Option<String>, sizes: &[(u32, u32)], config: Option<&Path>) -> Result<bool, CliError> {
+    let cfg = match config {
+        Some(p) => Config::load(p)?,
+        None => Config::default(),
+    };
+    cfg.validate()?;
     println!("lfast {} (wgpu 30)", env!("CARGO_PKG_VERSION"));
     let opts = GpuOptions { adapter_name: adapter, ..Default::default() };
     let env = |k: &str| std::env::var(k).unwrap_or_else(|_| "(unset)".into());
@@ -27,8 +77,10 @@ pub(super) fn run(adapter: Option<String>) -> Result<bool, CliError> {
         }
         AutoChoice::Cpu(why) => println!("--backend auto uses: cpu ({why})"),
     }
+    let mut limits = None;
     match GpuContext::new(&opts) {
         Ok(ctx) => {
+            limits = Some(ctx.device.limits());
             let l = ctx.device.limits();
             println!("--backend gpu opens: {} ({:?}, {:?})", ctx.info.name, ctx.info.backend, ctx.info.device_type);
             println!(
@@ -44,6 +96,7 @@ pub(super) fn run(adapter: Option<String>) -> Result<bool, CliError> {
     }
     println!("rayon threads: {}", rayon::current_num_threads());
     println!("CPU features: {}", cpu_features());
+    print_workspaces(&cfg, sizes, limits.as_ref())?;
     Ok(true)
 }
 

@@ -120,6 +120,13 @@ enum Cmd {
         /// Choose the adapter as `--adapter` does for the other commands
         #[arg(long, value_name = "NAME")]
         adapter: Option<String>,
+        /// Also print the GPU workspace of WxH frames (bytes per pixel, the largest buffer, the
+        /// limits it needs); comma-separated or repeated
+        #[arg(long, value_name = "WxH", value_delimiter = ',', value_parser = info::parse_size)]
+        size: Vec<(u32, u32)>,
+        /// Configuration file for --size (the default config otherwise)
+        #[arg(long, value_name = "FILE")]
+        config: Option<std::path::PathBuf>,
     },
     /// Evaluation suites: the paper's experiments and more, as CSV, plots and a report
     #[command(after_help = eval::AFTER_HELP)]
@@ -202,7 +209,7 @@ where
     let r = match cli.cmd {
         Cmd::Detect(a) => detect::run(a),
         Cmd::Edges(a) => edges::run(a),
-        Cmd::Info { adapter } => info::run(adapter),
+        Cmd::Info { adapter, size, config } => info::run(adapter, &size, config.as_deref()),
         Cmd::Eval(a) => eval::run(a),
         Cmd::Vo(a) => vo::run_vo(a),
         Cmd::Ate(a) => vo::run_ate(a),

@@ -1,9 +1,10 @@
 //! Every GPU buffer of one frame size, by name. Built once per size by
 //! [`Buffers::new`] and reused for every frame of that size.
 
+use super::footprint::{Sizes, rounded};
 use super::kernel::DYNAMIC_STRIDE;
 use super::kernel::init_buffer;
-use super::layout::{FrameLayout, MAX_LEVELS, MAX_WINDOWS_PER_AXIS, TILE, TILE_ROW};
+use super::layout::{FrameLayout, MAX_LEVELS, MAX_WINDOWS_PER_AXIS, TILE_ROW};
 use crate::config::Config;
 use crate::error::{Error, Result};
 use crate::spec::angle::AngleBins;
@@ -55,6 +56,19 @@ impl GpuKeypoint {
         [self.sub as u8 as i8, (self.sub >> 8) as u8 as i8]
     }
 }
+
+/// The label of the allocation `m` and `smooth` share.
+pub(crate) const SHARED_PACKED: &str = "m = smooth";
+/// The label of the allocation `labels`, `edge_list`, `resp` and `ranks` share.
+pub(crate) const SHARED_ATLAS: &str = "labels = edge_list = resp = ranks";
+/// The label of the allocation `classes` and `cand` share.
+pub(crate) const SHARED_CLASSES: &str = "classes = cand";
+/// The label of the allocation `window_hist` and `corners` share.
+pub(crate) const SHARED_CORNERS: &str = "window_hist = corners";
+/// The label of the allocation `cand_list` and `sel_members` share.
+pub(crate) const SHARED_LIST: &str = "cand_list = sel_members";
+/// Bytes of [`Buffers::mask`] until a mask is set.
+pub(crate) const MASK_UNSET: u64 = 16;
 
 /// u32 words per [`GpuKeypoint`].
 pub const KP_WORDS: u64 = 12;
@@ -136,7 +150,7 @@ pub struct Allocated {
 }
 
 impl Allocated {
-    fn of(layout: &FrameLayout) -> Self {
+    pub(crate) fn of(layout: &FrameLayout) -> Self {
         let (w, h) = layout.sizes[0];
         let levels = layout.n_levels() as u64;
         // Windows and grid sized for the most windows any level can have, so a
@@ -201,7 +215,8 @@ pub struct Buffers {
     pub input: wgpu::Buffer,
     /// The pyramid (level 0 = the input's luma), column-packed as `classes`.
     pub gray: wgpu::Buffer,
-    /// Level masks (nonzero = on), read when `Params::use_mask` is 1.
+    /// Level masks (nonzero = on, a u32 per pixel of every level), read when
+    /// `Params::use_mask` is 1: 16 bytes until `GpuDetector::set_mask` sets a mask.
     pub mask: wgpu::Buffer,
     /// D (SPEC 1), column-packed as `classes`.
     pub denoised: wgpu::Buffer,
@@ -209,6 +224,8 @@ pub struct Buffers {
     pub stage: Option<StagePlanes>,
     /// M8 = min(M, 255), column-packed as `classes`: all that the histograms,
     /// the windows and classify need of M (docs/algorithm.md, stage 6).
+    ///
+    /// One allocation with `smooth` (their stages never overlap; [`footprint`](super::footprint)).
     pub m: wgpu::Buffer,
     /// NMS survivors (0/1), column-packed as `classes`.
     pub nms: wgpu::Buffer,
@@ -221,9 +238,13 @@ pub struct Buffers {
     /// Per window min, max, median, V3.
     pub windows: wgpu::Buffer,
     /// Per window a 256-bin histogram of M8, summed from its cells (SPEC 5).
+    ///
+    /// One allocation with `corners` (their stages never overlap; [`footprint`](super::footprint)).
     pub window_hist: wgpu::Buffer,
     /// SPEC 6 classes, column-packed (four rows of a column per word, see
     /// [`FrameLayout::packed_offsets`](super::FrameLayout::packed_offsets)).
+    ///
+    /// One allocation with `cand` (their stages never overlap; [`footprint`](super::footprint)).
     pub classes: wgpu::Buffer,
     /// Classes after rules 1 and 2 (only NONE, WEAK, STRONG remain) as bits:
     /// one word per column of every tile, bit r active and bit 16 + r STRONG
@@ -235,6 +256,8 @@ pub struct Buffers {
     /// pads the list to a whole workgroup: 4 entries per tile and 64 more).
     pub walks: wgpu::Buffer,
     /// Union-find labels (hysteresis).
+    ///
+    /// One allocation with `edge_list`, `resp` and `ranks` (their stages never overlap; [`footprint`](super::footprint)).
     pub labels: wgpu::Buffer,
     /// Per root, one bit (bit i % 32 of word i / 32 for atlas index i): set
     /// if its component holds a STRONG pixel (hysteresis).
@@ -245,22 +268,36 @@ pub struct Buffers {
     /// and 8 more either side (shaders/lfast.wgsl; common.wgsl `tile_word`).
     pub edge_bits: wgpu::Buffer,
     /// L-FAST candidates (0/1), column-packed as `classes`.
+    ///
+    /// One allocation with `classes` (their stages never overlap; [`footprint`](super::footprint)).
     pub cand: wgpu::Buffer,
     /// The atlas index of every L-FAST candidate, unordered
     /// (shaders/cand_list.wgsl); as many slots as pixels.
+    ///
+    /// One allocation with `sel_members` (their stages never overlap; [`footprint`](super::footprint)).
     pub cand_list: wgpu::Buffer,
     /// The atlas index of every edge pixel the L-FAST test takes, unordered
     /// (shaders/lfast.wgsl `windows`); as many slots as pixels.
+    ///
+    /// One allocation with `labels`, `resp` and `ranks` (their stages never overlap; [`footprint`](super::footprint)).
     pub edge_list: wgpu::Buffer,
     /// Harris response of candidates (f32 bits).
+    ///
+    /// One allocation with `labels`, `edge_list` and `ranks` (their stages never overlap; [`footprint`](super::footprint)).
     pub resp: wgpu::Buffer,
     /// Corners surviving corner NMS, unordered ([`GpuKeypoint`]s).
+    ///
+    /// One allocation with `window_hist` (their stages never overlap; [`footprint`](super::footprint)).
     pub corners: wgpu::Buffer,
     /// Per corner its select record: order key, taken, level, `y << 16 | x`.
+    ///
+    /// One allocation with `labels`, `edge_list` and `resp` (their stages never overlap; [`footprint`](super::footprint)).
     pub ranks: wgpu::Buffer,
     /// select's bucket counts, prefix sums and cursors ([`SELECT_BUCKET_WORDS`]).
     pub sel_buckets: wgpu::Buffer,
     /// select's corner records grouped by bucket (4 words per keypoint slot).
+    ///
+    /// One allocation with `cand_list` (their stages never overlap; [`footprint`](super::footprint)).
     pub sel_members: wgpu::Buffer,
     /// The final keypoints in SPEC 9 order.
     pub keypoints: wgpu::Buffer,
@@ -271,6 +308,8 @@ pub struct Buffers {
     /// See [`indirect`].
     pub indirect: wgpu::Buffer,
     /// 7x7-blurred levels (SPEC 11), column-packed as `classes`.
+    ///
+    /// One allocation with `m` (their stages never overlap; [`footprint`](super::footprint)).
     pub smooth: wgpu::Buffer,
     /// Rotated patterns: per bin 256 pairs, each one word of four i8 (x1, y1,
     /// x2, y2, lowest byte first).
@@ -316,21 +355,9 @@ impl Buffers {
                 ),
             });
         }
-        let px_bytes = layout.total_px as u64 * 4;
-        let kp_bytes = layout.capacity as u64 * KP_WORDS * 4;
-        // 256 bins of 4 bytes per window, for as many windows as `windows`
-        // (a smaller frame may have more windows)
-        let window_hist_bytes = 1024 * allocated.windows;
-        let largest = px_bytes.max(kp_bytes).max(window_hist_bytes);
-        let max_binding = limits.max_storage_buffer_binding_size;
-        if largest > max_binding || largest > limits.max_buffer_size {
-            return Err(Error::GpuLimits {
-                reason: format!(
-                    "a {width}x{height} frame needs storage buffers of {largest} bytes, the device allows {}",
-                    max_binding.min(limits.max_buffer_size)
-                ),
-            });
-        }
+        let sizes = Sizes::of(cfg, &layout, &allocated);
+        let report = sizes.report(width, height);
+        report.fits(&limits)?;
         let [gx, gy, gz] = layout.pixel_groups();
         let lim = limits.max_compute_workgroups_per_dimension;
         // keypoint passes are dispatched indirectly with ceil(count / 64) groups
@@ -352,22 +379,36 @@ impl Buffers {
         let buf = |label: &str, bytes: u64| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                size: bytes.max(16).next_multiple_of(16),
+                size: rounded(bytes),
                 usage: storage,
                 mapped_at_creation: false,
             })
         };
         let init =
             |label: &str, contents: &[u8], usage: wgpu::BufferUsages| init_buffer(device, label, contents, usage);
-        let px = |label: &str| buf(label, px_bytes);
-        let n_levels = layout.n_levels() as u64;
+        let px = |label: &str| buf(label, sizes.atlas);
+        let packed = |label: &str| buf(label, sizes.packed);
+        // Buffers whose stages never overlap within a frame share one
+        // allocation (footprint::Sizes::allocations lists them): M8
+        // (gradient_nms to classify) and the smoothed levels (blur to orb); the union-find labels
+        // (hysteresis), the L-FAST edge list (lfast), the responses (response
+        // to snap; the response pass zeroes them itself) and select's records;
+        // the candidate list (lfast to snap) and select's buckets' members;
+        // the classes (classify to rules) and the L-FAST candidates (lfast to
+        // corner NMS; lfast's `windows` zeroes them); the windows' histograms
+        // (local_threshold, which zeroes them before the frame) and the corners
+        // (corner NMS to select).
+        let m_smooth = buf(SHARED_PACKED, sizes.shared_packed());
+        let shared = buf(SHARED_ATLAS, sizes.shared_atlas());
+        let list = buf(SHARED_LIST, sizes.shared_list());
+        let cand = packed(SHARED_CLASSES);
+        let hist_corners = buf(SHARED_CORNERS, sizes.shared_corners());
         let mut level_index = vec![0u8; MAX_LEVELS * DYNAMIC_STRIDE as usize];
         for l in 0..MAX_LEVELS {
             level_index[l * DYNAMIC_STRIDE as usize..][..4].copy_from_slice(&(l as u32).to_le_bytes());
         }
         let mut grid = layout.grid_data.clone();
         grid.resize((allocated.grid as usize).max(grid.len()).max(4), 0);
-        let cap = layout.capacity as u64;
         let patterns = pattern_words(cfg);
         let angle_bounds: Vec<i32> =
             AngleBins::new(cfg.orientation_bins.max(1)).bounds().iter().flat_map(|&(x, y)| [x, y]).collect();
@@ -389,38 +430,39 @@ impl Buffers {
                 wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             ),
             level_index: init("level_index", &level_index, wgpu::BufferUsages::UNIFORM),
-            input: buf("input", (width as u64 * height as u64).next_multiple_of(4)),
-            gray: buf("gray", allocated.packed * 4),
-            mask: px("mask"),
-            denoised: buf("denoised", allocated.packed * 4),
+            input: buf("input", sizes.input),
+            gray: packed("gray"),
+            // allocated by the first mask (GpuDetector::set_mask)
+            mask: buf("mask", MASK_UNSET),
+            denoised: packed("denoised"),
             stage: stage_planes.then(|| StagePlanes { gx: px("gx"), gy: px("gy"), s: px("s") }),
-            m: buf("m", allocated.packed * 4),
-            nms: buf("nms", allocated.packed * 4),
-            hist: buf("hist", 256 * 4 * n_levels),
-            otsu: buf("otsu", 4 * n_levels),
+            m: m_smooth.clone(),
+            nms: packed("nms"),
+            hist: buf("hist", sizes.hist),
+            otsu: buf("otsu", sizes.otsu),
             grid: init("grid", bytemuck::cast_slice(&grid), storage),
-            windows: buf("windows", 16 * allocated.windows),
-            window_hist: buf("window_hist", window_hist_bytes),
-            classes: buf("classes", allocated.packed * 4),
-            ruled: buf("ruled", allocated.tiles * TILE as u64 * 4),
-            walks: buf("walks", (allocated.tiles * 4 + 64) * 4),
-            labels: px("labels"),
-            flags: buf("flags", (layout.total_px as u64).div_ceil(32) * 4),
-            edges: buf("edges", allocated.packed * 4),
-            edge_bits: buf("edge_bits", allocated.tiles * TILE as u64 * 4),
-            cand: buf("cand", allocated.packed * 4),
-            cand_list: px("cand_list"),
-            edge_list: px("edge_list"),
-            resp: px("resp"),
-            corners: buf("corners", cap * KP_WORDS * 4),
-            ranks: buf("ranks", cap * 16),
+            windows: buf("windows", sizes.windows),
+            window_hist: hist_corners.clone(),
+            classes: cand.clone(),
+            ruled: buf("ruled", sizes.tiles),
+            walks: buf("walks", sizes.walks),
+            labels: shared.clone(),
+            flags: buf("flags", sizes.bits),
+            edges: packed("edges"),
+            edge_bits: buf("edge_bits", sizes.tiles),
+            cand,
+            cand_list: list.clone(),
+            edge_list: shared.clone(),
+            resp: shared.clone(),
+            corners: hist_corners,
+            ranks: shared.clone(),
             sel_buckets: buf("sel_buckets", SELECT_BUCKET_WORDS * 4),
-            sel_members: buf("sel_members", cap * 16),
-            keypoints: buf("keypoints", cap * KP_WORDS * 4),
-            descriptors: buf("descriptors", cap * DESC_WORDS * 4),
+            sel_members: list,
+            keypoints: buf("keypoints", sizes.keypoints),
+            descriptors: buf("descriptors", sizes.descriptors),
             counters: buf("counters", counter::LEN as u64 * 4),
             indirect: init("indirect", bytemuck::cast_slice(&indirect_init), storage | wgpu::BufferUsages::INDIRECT),
-            smooth: buf("smooth", allocated.packed * 4),
+            smooth: m_smooth,
             patterns: init("patterns", bytemuck::cast_slice(&patterns), storage),
             angle_bounds: init("angle_bounds", bytemuck::cast_slice(&angle_bounds), storage),
             allocated,
@@ -448,6 +490,24 @@ impl Buffers {
         true
     }
 
+    /// Allocates the mask plane for the current layout when it is smaller
+    /// (it is 16 bytes until the first mask: frames without one never pay its 4
+    /// bytes per pixel of every level). True when it was allocated: bind
+    /// groups made before hold the old buffer and must be made anew.
+    pub fn allocate_mask(&mut self, device: &wgpu::Device) -> bool {
+        let bytes = rounded(self.layout.total_px as u64 * 4);
+        if self.mask.size() >= bytes {
+            return false;
+        }
+        self.mask = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("mask"),
+            size: bytes,
+            usage: self.mask.usage(),
+            mapped_at_creation: false,
+        });
+        true
+    }
+
     /// Width and height of level 0.
     pub fn size(&self) -> (u32, u32) {
         self.layout.sizes[0]
@@ -458,7 +518,7 @@ impl Buffers {
 /// With `orientation_bins = 0` the one unrotated table (the shader rotates).
 /// With bins, the tables in 1/16 px follow (`RotatedPatterns::fine`, read
 /// by orb.wgsl `fine_word`): bin-major, two words a pair.
-fn pattern_words(cfg: &Config) -> Vec<u32> {
+pub(crate) fn pattern_words(cfg: &Config) -> Vec<u32> {
     if cfg.orientation_bins == 0 {
         return Pattern::orb().pairs.iter().map(|p| u32::from_le_bytes(p.map(|c| c as u8))).collect();
     }

@@ -248,6 +248,10 @@ impl GpuDetector {
                         *d = v as u32;
                     }
                 }
+                // allocated by the first mask; the stages that read it bound anew
+                if b.allocate_mask(&self.ctx.device) {
+                    ws.bound = self.passes.bind(&self.ctx.device, b)?;
+                }
                 if !words.is_empty() {
                     self.ctx.queue.write_buffer(&b.mask, 0, bytemuck::cast_slice(&words));
                 }

@@ -92,11 +92,11 @@ impl Pass for LfastPass {
     }
 
     fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
-        // `main` sets the corners' bytes of `cand` only; the cursors of its
-        // two lists (counters EDGES and CANDS) and of the stages after it
-        // (corner NMS's CORNERS, select's KEYPOINTS and TAKEN) start at 0.
+        // The cursors of its two lists (counters EDGES and CANDS) and of the
+        // stages after it (corner NMS's CORNERS, select's KEYPOINTS and TAKEN)
+        // start at 0. (`windows` zeroes `cand`, which shares its memory with
+        // `classes`, before `main` sets the corners' bytes.)
         const { assert!(counter::EDGES == 4 && counter::CANDS < 4 && counter::TAKEN < 4) };
-        encoder.clear_buffer(&b.cand, 0, None);
         encoder.clear_buffer(&b.counters, 0, Some(4 * (counter::EDGES as u64 + 1)));
     }
 }

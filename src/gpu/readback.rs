@@ -108,8 +108,7 @@ fn staging_bytes(n: u64) -> u64 {
 
 /// Keypoint slots a frame of `b` can fill under `cfg`: the capacity, or the cap.
 pub(super) fn frame_slots(cfg: &Config, b: &Buffers) -> u64 {
-    let cap = b.allocated.keypoints;
-    if cfg.n_features > 0 { cap.min(cfg.n_features as u64) } else { cap }
+    super::footprint::final_slots(cfg, &b.allocated)
 }
 
 /// The largest staging or spill buffer a ring for `b` may allocate.
