@@ -314,13 +314,25 @@ impl CpuDetector {
         smooth: &mut Smoothing,
     ) -> (Vec<KeyPoint>, Vec<Descriptor>) {
         let smoothed = smooth_used_levels(levels, corners.iter().map(|c| c.level), smooth);
-        corners
+        // In raster order per level, then back to SPEC 9's (response) order:
+        // each keypoint reads ~31 rows of its level around it, which on a large
+        // frame come from memory rather than cache unless the previous keypoint
+        // read the same rows (same output: each keypoint is computed alone).
+        let mut order: Vec<u32> = (0..corners.len() as u32).collect();
+        order.sort_unstable_by_key(|&i| {
+            let c = &corners[i as usize];
+            (c.level, c.y, c.x)
+        });
+        let mut done: Vec<(u32, KeyPoint, Descriptor)> = order
             .par_iter()
-            .map(|c| {
+            .map(|&i| {
+                let c = &corners[i as usize];
                 let (kp, bin) = self.keypoint(levels, c, centre);
-                (kp, self.describe(&smoothed[c.level as usize], c, kp.angle, bin))
+                (i, kp, self.describe(&smoothed[c.level as usize], c, kp.angle, bin))
             })
-            .unzip()
+            .collect();
+        done.sort_unstable_by_key(|d| d.0);
+        done.into_iter().map(|(_, kp, d)| (kp, d)).unzip()
     }
 
     /// Descriptors of `kps` on `base` as OpenCV 5's ORB `compute()` makes them
