@@ -398,9 +398,9 @@ impl Buffers {
         // corner NMS; lfast's `windows` zeroes them); the windows' histograms
         // (local_threshold, which zeroes them before the frame) and the corners
         // (corner NMS to select).
-        let m_smooth = buf(SHARED_PACKED, sizes.shared_packed());
-        let shared = buf(SHARED_ATLAS, sizes.shared_atlas());
-        let list = buf(SHARED_LIST, sizes.shared_list());
+        let m_smooth = packed(SHARED_PACKED);
+        let shared = buf(SHARED_ATLAS, sizes.lists());
+        let list = buf(SHARED_LIST, sizes.lists());
         let cand = packed(SHARED_CLASSES);
         let hist_corners = buf(SHARED_CORNERS, sizes.shared_corners());
         let mut level_index = vec![0u8; MAX_LEVELS * DYNAMIC_STRIDE as usize];
@@ -408,8 +408,9 @@ impl Buffers {
             level_index[l * DYNAMIC_STRIDE as usize..][..4].copy_from_slice(&(l as u32).to_le_bytes());
         }
         let mut grid = layout.grid_data.clone();
-        grid.resize((allocated.grid as usize).max(grid.len()).max(4), 0);
+        grid.resize((sizes.grid / 4) as usize, 0);
         let patterns = pattern_words(cfg);
+        debug_assert_eq!(patterns.len(), pattern_words_len(cfg));
         let angle_bounds: Vec<i32> =
             AngleBins::new(cfg.orientation_bins.max(1)).bounds().iter().flat_map(|&(x, y)| [x, y]).collect();
         let mut indirect_init = [0u32; (indirect::SIZE / 4) as usize];
@@ -514,11 +515,18 @@ impl Buffers {
     }
 }
 
+/// The length of [`pattern_words`] without building the tables: the one
+/// table of 256 pairs, or per bin 256 pairs of one word and 256 of two.
+pub(crate) fn pattern_words_len(cfg: &Config) -> usize {
+    let pairs = Pattern::orb().pairs.len();
+    if cfg.orientation_bins == 0 { pairs } else { 3 * pairs * cfg.orientation_bins as usize }
+}
+
 /// The rotated pattern tables as i32 words: bin-major, 256 pairs of 4.
 /// With `orientation_bins = 0` the one unrotated table (the shader rotates).
 /// With bins, the tables in 1/16 px follow (`RotatedPatterns::fine`, read
 /// by orb.wgsl `fine_word`): bin-major, two words a pair.
-pub(crate) fn pattern_words(cfg: &Config) -> Vec<u32> {
+fn pattern_words(cfg: &Config) -> Vec<u32> {
     if cfg.orientation_bins == 0 {
         return Pattern::orb().pairs.iter().map(|p| u32::from_le_bytes(p.map(|c| c as u8))).collect();
     }

@@ -87,7 +87,7 @@ impl Sizes {
             keypoints: slots * KP_WORDS * 4,
             descriptors: slots * DESC_WORDS * 4,
             mask: layout.total_px as u64 * 4,
-            patterns: 4 * super::buffers::pattern_words(cfg).len() as u64,
+            patterns: 4 * super::buffers::pattern_words_len(cfg) as u64,
             angle_bounds: 8 * cfg.orientation_bins.max(1) as u64,
         }
     }
@@ -102,7 +102,7 @@ impl Sizes {
             ("gray", s.packed),
             ("mask", MASK_UNSET),
             ("denoised", s.packed),
-            (SHARED_PACKED, s.shared_packed()),
+            (SHARED_PACKED, s.packed),
             ("nms", s.packed),
             ("hist", s.hist),
             ("otsu", s.otsu),
@@ -111,11 +111,11 @@ impl Sizes {
             (SHARED_CLASSES, s.packed),
             ("ruled", s.tiles),
             ("walks", s.walks),
-            (SHARED_ATLAS, s.shared_atlas()),
+            (SHARED_ATLAS, s.lists()),
             ("flags", s.bits),
             ("edges", s.packed),
             ("edge_bits", s.tiles),
-            (SHARED_LIST, s.shared_list()),
+            (SHARED_LIST, s.lists()),
             (SHARED_CORNERS, s.shared_corners()),
             ("sel_buckets", SELECT_BUCKET_WORDS * 4),
             ("keypoints", s.keypoints),
@@ -132,24 +132,16 @@ impl Sizes {
             .collect()
     }
 
-    /// The allocation `m` and `smooth` share.
-    pub(crate) fn shared_packed(&self) -> u64 {
-        self.packed
-    }
-
-    /// The allocation `labels`, `edge_list`, `resp` and `ranks` share.
-    pub(crate) fn shared_atlas(&self) -> u64 {
+    /// The allocations `labels = edge_list = resp = ranks` and `cand_list =
+    /// sel_members`: a u32 per pixel of every level, or select's records when
+    /// they take more (tiny frames).
+    pub(crate) fn lists(&self) -> u64 {
         self.atlas.max(self.records)
     }
 
     /// The allocation `window_hist` and `corners` share.
     pub(crate) fn shared_corners(&self) -> u64 {
         self.window_hist.max(self.corners)
-    }
-
-    /// The allocation `cand_list` and `sel_members` share.
-    pub(crate) fn shared_list(&self) -> u64 {
-        self.atlas.max(self.records)
     }
 
     /// The report of a `width x height` frame laid out into these sizes.
