@@ -80,8 +80,8 @@ pub(super) fn run(adapter: Option<String>, sizes: &[(u32, u32)], config: Option<
     let mut limits = None;
     match GpuContext::new(&opts) {
         Ok(ctx) => {
-            limits = Some(ctx.device.limits());
             let l = ctx.device.limits();
+            limits = Some(l.clone());
             println!("--backend gpu opens: {} ({:?}, {:?})", ctx.info.name, ctx.info.backend, ctx.info.device_type);
             println!(
                 "  limits: max buffer {} MiB, storage binding {} MiB, workgroups per dimension {}, invocations per workgroup {}",

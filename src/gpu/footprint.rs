@@ -2,7 +2,7 @@
 //! buffer [`Buffers`](super::Buffers) allocates, each allocation once. The one
 //! definition of those sizes: `Buffers::build` allocates them, and
 //! [`workspace_report`] (`lfast info --size`, examples/gpu_bench.rs) reports them.
-//! Tests: tests/gpu_robustness.rs (the report == the sizes of a workspace's buffers).
+//! Tests: tests/gpu_footprint.rs (the report == the sizes of a workspace's buffers).
 
 use super::buffers::{
     Allocated, DESC_WORDS, KP_WORDS, MASK_UNSET, SELECT_BUCKET_WORDS, SHARED_ATLAS, SHARED_CLASSES, SHARED_CORNERS,
