@@ -4,7 +4,9 @@
 //! 8 or 16 lanes wide on machines that have it. No code is AVX2-only.
 
 /// Defines `fn $name(args) -> ret` that runs `$body`, using an AVX2+FMA build
-/// of it when the CPU has those features.
+/// of it (with the bit instructions every AVX2 CPU has: `popcnt`, `lzcnt`,
+/// BMI1/2, so that `count_ones` and friends are one instruction) when the CPU
+/// has those features.
 macro_rules! dispatch {
     ($(#[$m:meta])* $vis:vis fn $name:ident($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
         $(#[$m])*
@@ -13,10 +15,10 @@ macro_rules! dispatch {
             fn inner($($arg: $ty),*) $(-> $ret)? $body
             #[cfg(target_arch = "x86_64")]
             {
-                #[target_feature(enable = "avx2,fma")]
+                #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
                 fn avx2($($arg: $ty),*) $(-> $ret)? { inner($($arg),*) }
-                if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-                    // SAFETY: the CPU has AVX2 and FMA, checked just above.
+                if $crate::cpu::simd::has_avx2() {
+                    // SAFETY: the CPU has these features, checked just above.
                     return unsafe { avx2($($arg),*) };
                 }
             }
@@ -25,6 +27,19 @@ macro_rules! dispatch {
     };
 }
 pub(crate) use dispatch;
+
+/// Whether the CPU has what [`dispatch!`]'s fast build is compiled for: AVX2,
+/// FMA, `popcnt`, `lzcnt`, BMI1 and BMI2 (each detection is cached by std).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) fn has_avx2() -> bool {
+    std::is_x86_feature_detected!("avx2")
+        && std::is_x86_feature_detected!("fma")
+        && std::is_x86_feature_detected!("popcnt")
+        && std::is_x86_feature_detected!("lzcnt")
+        && std::is_x86_feature_detected!("bmi1")
+        && std::is_x86_feature_detected!("bmi2")
+}
 
 /// Pixels per chunk of the chunked row kernels (32 bytes: one AVX2 register of u8).
 pub(crate) const CHUNK: usize = 32;
