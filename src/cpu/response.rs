@@ -166,32 +166,34 @@ fn sums_rect<const F: usize, const G: usize, const SY: usize, const SX: usize>(
             s[r][i] = l + 2 * m + rt;
         }
     }
-    let mut p = [[[0i32; 16]; G]; 3];
-    for g in 0..G {
+    // Ix, Iy at gradient row g (footprint rows g..=g+2), column i. The
+    // products are formed where the column sums take them (twice a row:
+    // entering and leaving), not stored: a stored array of them cost a
+    // memset per call (~2.5 KB for the 7x7 square, per keypoint).
+    let grad = |g: usize, i: usize| ((h[g][i] + 2 * h[g + 1][i] + h[g + 2][i]) as i32, (s[g + 2][i] - s[g][i]) as i32);
+    debug_assert_eq!(G, SY + 6);
+    let mut out = [[[0i32; SX]; SY]; 3];
+    // the 7-row column sums of block row 0, then slid down a row at a time
+    let mut col = [[0i32; 16]; 3];
+    for g in 0..7 {
         for i in 0..16 {
-            let ix = (h[g][i] + 2 * h[g + 1][i] + h[g + 2][i]) as i32;
-            let iy = (s[g + 2][i] - s[g][i]) as i32;
-            p[0][g][i] = ix * ix;
-            p[1][g][i] = iy * iy;
-            p[2][g][i] = ix * iy;
+            let (x, y) = grad(g, i);
+            col[0][i] += x * x;
+            col[1][i] += y * y;
+            col[2][i] += x * y;
         }
     }
-    let mut out = [[[0i32; SX]; SY]; 3];
-    for (o, p) in out.iter_mut().zip(&p) {
-        // the 7-row column sums of block row 0, then slid down a row at a time
-        let mut col = [0i32; 16];
-        for row in &p[..7] {
+    for j in 0..SY {
+        if j > 0 {
             for i in 0..16 {
-                col[i] += row[i];
+                let ((xa, ya), (xr, yr)) = (grad(j + 6, i), grad(j - 1, i));
+                col[0][i] += xa * xa - xr * xr;
+                col[1][i] += ya * ya - yr * yr;
+                col[2][i] += xa * ya - xr * yr;
             }
         }
-        for (j, o) in o.iter_mut().enumerate() {
-            if j > 0 {
-                for i in 0..16 {
-                    col[i] += p[j + 6][i] - p[j - 1][i];
-                }
-            }
-            for (i, o) in o.iter_mut().enumerate() {
+        for (o, col) in out.iter_mut().zip(&col) {
+            for (i, o) in o[j].iter_mut().enumerate() {
                 *o = col[i..i + 7].iter().sum();
             }
         }
