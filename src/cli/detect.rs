@@ -231,7 +231,11 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
     report::catch_interrupts();
     let mut rep = Reporter::new(jobs.iter().filter(|j| j.input.is_file()).count() as u64, a.common.quiet);
     let threads = pool.current_num_threads().max(1);
-    let decoders = (threads / 2).clamp(1, 4);
+    // Decoder threads: half the workers, 2 to 4 (1 with one worker). Two even
+    // on two cores: the first frame's decode holds up every worker, and a
+    // second decoder fills the other core with the next frame meanwhile (four
+    // 3840x2160 JPEGs, `--jobs 2`: median 1.10 -> 1.00 s; 51 KITTI PNGs the same).
+    let decoders = (threads / 2).clamp(2.min(threads), 4);
     let next = AtomicUsize::new(0);
     // set when the disk is full: no file is taken after it
     let stop = AtomicBool::new(false);
