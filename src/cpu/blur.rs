@@ -192,12 +192,21 @@ fn blur_n<const N: usize>(
     };
     // the vertical taps of output row y read the horizontal sums of these rows
     let tap_row = |y: usize, i: usize| reflect101(y as i32 + i as i32 - r as i32, h as i32);
-    out.data.par_chunks_mut(BAND_ROWS * w).enumerate().for_each_init(Vec::new, |tmp: &mut Vec<u16>, (b, band)| {
+    // each thread's rows of horizontal sums, kept from band to band and from
+    // frame to frame (taken, so that a nested call finds none): grown, never
+    // cleared, as every row a band reads is written first
+    thread_local!(static TMP: std::cell::Cell<Vec<u16>> = const { std::cell::Cell::new(Vec::new()) });
+    out.data.par_chunks_mut(BAND_ROWS * w).enumerate().for_each(|(b, band)| {
         let (y0, y1) = (b * BAND_ROWS, b * BAND_ROWS + band.len() / w);
         // the rows the band reads: y0 - r ..= y1 - 1 + r, reflected; a range
         let rows = (y0..y1).flat_map(|y| (0..N).map(move |i| tap_row(y, i)));
         let (lo, hi) = rows.fold((usize::MAX, 0), |(lo, hi), yy| (lo.min(yy), hi.max(yy)));
-        tmp.resize((hi - lo + 1) * w, 0);
+        let mut kept = TMP.take();
+        let n = (hi - lo + 1) * w;
+        if kept.len() < n {
+            kept.resize(n, 0);
+        }
+        let tmp = &mut kept[..n];
         for (k, row) in tmp.chunks_mut(w).enumerate() {
             hsum(lo + k, row);
         }
@@ -209,6 +218,7 @@ fn blur_n<const N: usize>(
             });
             vrow(t, kernel, row);
         }
+        TMP.set(kept);
     });
 }
 

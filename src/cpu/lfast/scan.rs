@@ -94,15 +94,18 @@ fn cols3(row: &[u8], n: usize) -> [&[u8]; 3] {
     [&row[0..n], &row[1..n + 1], &row[2..n + 2]]
 }
 
-/// Step 4 for every pixel q of `e` (see [`super::supports`]), in `s` (resized
-/// to `e`'s size): 1 where q is an edge or at least `support` of its 8
+/// Step 4 for every pixel q of `e` (see [`super::supports`]), in the first
+/// `w * h` bytes of `s` (grown to hold them, never shrunk): 1 where q is an edge or at least `support` of its 8
 /// neighbours are, else 0. Only the first and last row and column are left
 /// as they were (corner tests never read them: q lies at most 6 pixels from
 /// p, p at least 7 from every side), so `s` can be reused without clearing.
 pub(super) fn support_map_into(e: &Plane<u8>, support: u32, s: &mut Vec<u8>) {
     use rayon::prelude::*;
     let (w, h) = (e.width as usize, e.height as usize);
-    s.resize(w * h, 0);
+    // a smaller level after a larger one clears nothing
+    if s.len() < w * h {
+        s.resize(w * h, 0);
+    }
     if w >= 3 && h >= 3 {
         s[w..(h - 1) * w].par_chunks_mut(w).enumerate().for_each(|(k, out)| {
             let rows = &e.data[k * w..(k + 3) * w];
