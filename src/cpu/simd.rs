@@ -25,6 +25,26 @@ macro_rules! dispatch {
             inner($($arg),*)
         }
     };
+    // `fn name<const FLAG>(..)`: the body sees `FLAG`, true in the AVX2 build
+    // only, to call hand-written AVX2 code (`#[target_feature(enable = "avx2")]`
+    // functions inline into that build).
+    ($(#[$m:meta])* $vis:vis fn $name:ident<const $flag:ident>($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+        $(#[$m])*
+        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
+            #[inline(always)]
+            fn inner<const $flag: bool>($($arg: $ty),*) $(-> $ret)? $body
+            #[cfg(target_arch = "x86_64")]
+            {
+                #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+                fn avx2($($arg: $ty),*) $(-> $ret)? { inner::<true>($($arg),*) }
+                if $crate::cpu::simd::has_avx2() {
+                    // SAFETY: the CPU has these features, checked just above.
+                    return unsafe { avx2($($arg),*) };
+                }
+            }
+            inner::<false>($($arg),*)
+        }
+    };
 }
 pub(crate) use dispatch;
 

@@ -249,82 +249,44 @@ fn bit_masks_avx2(rows: &[&[u8; CHUNK]; 16], v: u8) -> [u16; CHUNK] {
     masks
 }
 
-/// Appends to `out` the corners `[x, y]` of the window's row `y` with x in
-/// `x0..x1` (raster order), where `mrow` (if any) is non-zero. Needs
-/// `7 <= x0`, `x1 + 7 <= w` and `x1 - x0 >= 32` (panics otherwise).
-pub(super) fn scan_row(
-    win: &Window<'_>,
-    y: u32,
-    x0: usize,
-    x1: usize,
-    mrow: Option<&[u8]>,
-    p: &LfastParams,
-    out: &mut Vec<[u32; 2]>,
-) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
-        fn avx2(
-            win: &Window<'_>,
-            y: u32,
-            x0: usize,
-            x1: usize,
-            mrow: Option<&[u8]>,
-            p: &LfastParams,
-            out: &mut Vec<[u32; 2]>,
-        ) {
-            scan_row_with::<true>(win, y, x0, x1, mrow, p, out)
-        }
-        if crate::cpu::simd::has_avx2() {
-            // SAFETY: the CPU has these features, checked just above.
-            return unsafe { avx2(win, y, x0, x1, mrow, p, out) };
-        }
-    }
-    scan_row_with::<false>(win, y, x0, x1, mrow, p, out)
-}
-
-/// [`scan_row`]'s loop; `AVX2` only from its AVX2 build.
-#[inline(always)]
-fn scan_row_with<const AVX2: bool>(
-    win: &Window<'_>,
-    y: u32,
-    x0: usize,
-    x1: usize,
-    mrow: Option<&[u8]>,
-    p: &LfastParams,
-    out: &mut Vec<[u32; 2]>,
-) {
-    assert!(x0 >= 7 && x1 + 7 <= win.w && x1 >= x0 + CHUNK, "scan_row: columns {x0}..{x1} of {}", win.w);
-    let mids = branch_mids();
-    let mut xs = x0;
-    let mut skip = 0; // pixels at the start of this chunk done by the one before
-    loop {
-        // SAFETY: xs >= x0 >= 7 and xs + 32 <= x1, x1 + 7 <= w, asserted above
-        let mut bits = eq_bits(unsafe { win.bytes(xs, 0) }, EDGE);
-        if let Some(m) = mrow {
-            for (j, &v) in m[xs..xs + CHUNK].iter().enumerate() {
-                bits &= !(((v == 0) as u32) << j);
-            }
-        }
-        bits &= u32::MAX << skip;
-        if bits != 0 {
-            // SAFETY: as above; AVX2 only from the AVX2 build
-            let (masks, sups) = unsafe { (chunk_masks::<AVX2>(win, xs), chunk_supports::<AVX2>(win, xs)) };
-            while bits != 0 {
-                let j = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                if decide(masks[j] as u32, sups[j] as u32, p, mids) {
-                    out.push([(xs + j) as u32, y]);
+dispatch! {
+    /// Appends to `out` the corners `[x, y]` of the window's row `y` with x in
+    /// `x0..x1` (raster order), where `mrow` (if any) is non-zero. Needs
+    /// `7 <= x0`, `x1 + 7 <= w` and `x1 - x0 >= 32` (panics otherwise).
+    pub(super) fn scan_row<const AVX2>(win: &Window<'_>, y: u32, x0: usize, x1: usize, mrow: Option<&[u8]>,
+                                       p: &LfastParams, out: &mut Vec<[u32; 2]>) {
+        assert!(x0 >= 7 && x1 + 7 <= win.w && x1 >= x0 + CHUNK, "scan_row: columns {x0}..{x1} of {}", win.w);
+        let mids = branch_mids();
+        let mut xs = x0;
+        let mut skip = 0; // pixels at the start of this chunk done by the one before
+        loop {
+            // SAFETY: xs >= x0 >= 7 and xs + 32 <= x1, x1 + 7 <= w, asserted above
+            let mut bits = eq_bits(unsafe { win.bytes(xs, 0) }, EDGE);
+            if let Some(m) = mrow {
+                for (j, &v) in m[xs..xs + CHUNK].iter().enumerate() {
+                    bits &= !(((v == 0) as u32) << j);
                 }
             }
+            bits &= u32::MAX << skip;
+            if bits != 0 {
+                // SAFETY: as above; AVX2 only from the AVX2 build
+                let (masks, sups) = unsafe { (chunk_masks::<AVX2>(win, xs), chunk_supports::<AVX2>(win, xs)) };
+                while bits != 0 {
+                    let j = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    if decide(masks[j] as u32, sups[j] as u32, p, mids) {
+                        out.push([(xs + j) as u32, y]);
+                    }
+                }
+            }
+            if xs + CHUNK == x1 {
+                break;
+            }
+            // the last chunk ends at x1, overlapping the one before
+            let next = (xs + CHUNK).min(x1 - CHUNK);
+            skip = xs + CHUNK - next;
+            xs = next;
         }
-        if xs + CHUNK == x1 {
-            break;
-        }
-        // the last chunk ends at x1, overlapping the one before
-        let next = (xs + CHUNK).min(x1 - CHUNK);
-        skip = xs + CHUNK - next;
-        xs = next;
     }
 }
 
