@@ -9,20 +9,8 @@
 /// has those features.
 macro_rules! dispatch {
     ($(#[$m:meta])* $vis:vis fn $name:ident($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
-        $(#[$m])*
-        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
-            #[inline(always)]
-            fn inner($($arg: $ty),*) $(-> $ret)? $body
-            #[cfg(target_arch = "x86_64")]
-            {
-                #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
-                fn avx2($($arg: $ty),*) $(-> $ret)? { inner($($arg),*) }
-                if $crate::cpu::simd::has_avx2() {
-                    // SAFETY: the CPU has these features, checked just above.
-                    return unsafe { avx2($($arg),*) };
-                }
-            }
-            inner($($arg),*)
+        $crate::cpu::simd::dispatch! {
+            $(#[$m])* $vis fn $name<const _AVX2>($($arg: $ty),*) $(-> $ret)? $body
         }
     };
     // `fn name<const FLAG>(..)`: the body sees `FLAG`, true in the AVX2 build

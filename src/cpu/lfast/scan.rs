@@ -95,8 +95,8 @@ fn cols3(row: &[u8], n: usize) -> [&[u8]; 3] {
 }
 
 /// Step 4 for every pixel q of `e` (see [`super::supports`]), in the first
-/// `w * h` bytes of `s` (grown to hold them, never shrunk): 1 where q is an edge or at least `support` of its 8
-/// neighbours are, else 0. Only the first and last row and column are left
+/// `w * h` bytes of `s` (grown to hold them, never shrunk): 1 where q is an
+/// edge or at least `support` of its 8 neighbours are, else 0. Only the first and last row and column are left
 /// as they were (corner tests never read them: q lies at most 6 pixels from
 /// p, p at least 7 from every side), so `s` can be reused without clearing.
 pub(super) fn support_map_into(e: &Plane<u8>, support: u32, s: &mut Vec<u8>) {
