@@ -248,6 +248,7 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
         for _ in 0..decoders {
             let tx = tx_dec.clone();
             s.spawn(move || {
+                let mut loader = crate::image::GrayLoader::default();
                 loop {
                     if report::interrupted() || stop.load(Ordering::Relaxed) {
                         break;
@@ -259,7 +260,7 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
                     } else if skip_existing && job.outputs.iter().all(|p| p.is_file()) {
                         Stage::Skip
                     } else {
-                        match crate::image::load_gray(&job.input.path) {
+                        match loader.load(&job.input.path) {
                             Ok(img) => Stage::Decoded(img),
                             Err(e) => Stage::Failed(report::reason(&e)),
                         }

@@ -329,9 +329,10 @@ pub fn run_sequence(seq: &Path, o: &VoOptions) -> Result<VoRun, VoError> {
         }
         None => None,
     };
-    let images = frames.into_iter().enumerate().map(|(i, path)| {
+    let mut loader = crate::image::GrayLoader::default();
+    let images = frames.into_iter().enumerate().map(move |(i, path)| {
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        Ok((start + i, name, crate::image::load_gray(&path)?))
+        Ok((start + i, name, loader.load(&path)?))
     });
     run_frames(seq, images, calib, gt.as_deref(), o)
 }
