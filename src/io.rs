@@ -382,7 +382,8 @@ mod tests {
         // every class of f32: random bits (NaN and infinities too), integers, tiny, huge, signed zeros
         let mut specials = vec![0.0f32, -0.0, 1.0, -1.0, 31.0, 359.99997, 1e-45, f32::MIN_POSITIVE, f32::MAX, f32::MIN];
         specials.extend([f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.1, 1e7, 1.5e16, 123456.79, -1.1754944e-38]);
-        let mut float = |i: usize| if i % 3 == 0 { specials[i / 3 % specials.len()] } else { f32::from_bits(next()) };
+        let mut float =
+            |i: usize| if i.is_multiple_of(3) { specials[i / 3 % specials.len()] } else { f32::from_bits(next()) };
         let mut kps = Vec::new();
         for i in 0..300 {
             let mut k = KeyPoint::new(float(i), float(i + 1), float(i + 2));
