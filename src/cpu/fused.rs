@@ -163,13 +163,16 @@ dispatch! {
 /// One gradient row from D rows y and y+1 (clamped by the caller): S, the
 /// sector code and M8 of each column. With AVX2 the columns before the last
 /// few come from [`gradient_x86::gradient_cols`], the rest from [`gradient_tail`].
-fn gradient_row(r0: &[u8], r1: &[u8], s: &mut [u32], sec: &mut [u8], m8: &mut [u8]) {
+/// A large level's two passes each take only what they use: M8 for the
+/// histograms (`S_SEC = false`), S and the sector for the NMS (`M8 =
+/// false`); the slices of the other outputs then hold only the tail's columns.
+fn gradient_row<const S_SEC: bool, const M8: bool>(r0: &[u8], r1: &[u8], s: &mut [u32], sec: &mut [u8], m8: &mut [u8]) {
     #[allow(unused_mut)]
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2, checked just above.
-        done = unsafe { gradient_x86::gradient_cols(r0, r1, s, sec, m8) };
+        done = unsafe { gradient_x86::gradient_cols::<S_SEC, M8>(r0, r1, s, sec, m8) };
     }
     gradient_tail(r0, r1, s, sec, m8, done);
 }
@@ -409,7 +412,13 @@ impl<'a> GradientRing<'a> {
         let (w, h) = (d.width as usize, d.height as usize);
         // y + 1 clamps to the last row
         let below = d.row((y + 1).min(h - 1) as u32);
-        gradient_row(d.row(y as u32), below, &mut self.s[k][1..=w], &mut self.sec[k][1..=w], &mut self.m8);
+        gradient_row::<true, false>(
+            d.row(y as u32),
+            below,
+            &mut self.s[k][1..=w],
+            &mut self.sec[k][1..=w],
+            &mut self.m8,
+        );
         self.row[k] = Some(y);
     }
 
@@ -533,7 +542,11 @@ fn edges_fused_keeping(
                     }
                     _ => (&mut s_tmp[..], &mut sec_tmp[..]),
                 };
-                gradient_row(d_row(y), below, s_row, sec_row, &mut m8);
+                if keep {
+                    gradient_row::<true, true>(d_row(y), below, s_row, sec_row, &mut m8);
+                } else {
+                    gradient_row::<false, true>(d_row(y), below, s_row, sec_row, &mut m8);
+                }
                 band.add_row(cx, &m8);
             }
             band.finish()

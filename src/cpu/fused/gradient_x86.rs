@@ -11,14 +11,21 @@
 
 use std::arch::x86_64::*;
 
-/// Columns `0..n` of a gradient row, `n` the largest multiple of 16 with
+/// Columns `0..n` of a gradient row (S and the sector when `S_SEC`, M8 when
+/// `M8`; the other slices are left as they are), `n` the largest multiple of 16 with
 /// `n + 1 <= w` (0 when `w < 17`); returns `n`. The slices have length `w`
 /// at least (`r0`'s length is `w`).
 ///
 /// # Safety
 /// The CPU has AVX2.
 #[target_feature(enable = "avx2")]
-pub(super) unsafe fn gradient_cols(r0: &[u8], r1: &[u8], s: &mut [u32], sec: &mut [u8], m8: &mut [u8]) -> usize {
+pub(super) unsafe fn gradient_cols<const S_SEC: bool, const M8: bool>(
+    r0: &[u8],
+    r1: &[u8],
+    s: &mut [u32],
+    sec: &mut [u8],
+    m8: &mut [u8],
+) -> usize {
     let w = r0.len();
     let n = if w >= 17 { (w - 1) / 16 * 16 } else { 0 };
     assert!(r1.len() >= w && s.len() >= w && sec.len() >= w && m8.len() >= w, "gradient_cols: short rows");
@@ -43,13 +50,19 @@ pub(super) unsafe fn gradient_cols(r0: &[u8], r1: &[u8], s: &mut [u32], sec: &mu
             let (s_lo, s_hi) = (_mm256_madd_epi16(lo, lo), _mm256_madd_epi16(hi, hi));
             let s0 = _mm256_permute2x128_si256::<0x20>(s_lo, s_hi); // pixels 0-7
             let s1 = _mm256_permute2x128_si256::<0x31>(s_lo, s_hi); // pixels 8-15
+            if M8 {
+                // M8: f32 holds S exactly and its rounded square root truncates to isqrt(S)
+                let q = |v: __m256i| _mm256_srli_epi32::<1>(_mm256_cvttps_epi32(_mm256_sqrt_ps(_mm256_cvtepi32_ps(v))));
+                // packus pairs lanes: [0-3, 8-11 | 4-7, 12-15] -> reorder the 64-bit quarters
+                let q16 = _mm256_permute4x64_epi64::<0b11_01_10_00>(_mm256_packus_epi32(q(s0), q(s1)));
+                store16(m8, x, _mm256_packus_epi16(q16, q16)); // saturates at 255
+            }
+            if !S_SEC {
+                x += 16;
+                continue;
+            }
             _mm256_storeu_si256(s.as_mut_ptr().add(x).cast::<__m256i>(), s0);
             _mm256_storeu_si256(s.as_mut_ptr().add(x + 8).cast::<__m256i>(), s1);
-            // M8: f32 holds S exactly and its rounded square root truncates to isqrt(S)
-            let q = |v: __m256i| _mm256_srli_epi32::<1>(_mm256_cvttps_epi32(_mm256_sqrt_ps(_mm256_cvtepi32_ps(v))));
-            // packus pairs lanes: [0-3, 8-11 | 4-7, 12-15] -> reorder the 64-bit quarters
-            let q16 = _mm256_permute4x64_epi64::<0b11_01_10_00>(_mm256_packus_epi32(q(s0), q(s1)));
-            store16(m8, x, _mm256_packus_epi16(q16, q16)); // saturates at 255
             // sector code: vertical 1, horizontal 0, else 2 + (signs differ)
             let (ax, ay) = (_mm256_abs_epi16(dx), _mm256_abs_epi16(dy));
             let test = |p: __m256i, q: __m256i, k: __m256i| {

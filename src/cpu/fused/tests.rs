@@ -54,9 +54,15 @@ fn gradient_row_vector_equals_scalar() {
             let (r0, r1): (Vec<u8>, Vec<u8>) = (0..w).map(|_| (byte(), byte())).unzip();
             let (mut s, mut sec, mut m8) = (vec![0; w], vec![0; w], vec![0; w]);
             let (mut s2, mut sec2, mut m82) = (vec![1; w], vec![9; w], vec![7; w]);
-            gradient_row(&r0, &r1, &mut s, &mut sec, &mut m8);
+            gradient_row::<true, true>(&r0, &r1, &mut s, &mut sec, &mut m8);
             gradient_tail(&r0, &r1, &mut s2, &mut sec2, &mut m82, 0);
             assert_eq!((&s, &sec, &m8), (&s2, &sec2, &m82), "w {w}");
+            // each pass of a large level: its outputs alike
+            let (mut s3, mut sec3, mut m83) = (vec![5; w], vec![5; w], vec![5; w]);
+            gradient_row::<false, true>(&r0, &r1, &mut s3, &mut sec3, &mut m83);
+            assert_eq!(m83, m8, "w {w}, M8 only");
+            gradient_row::<true, false>(&r0, &r1, &mut s3, &mut sec3, &mut m83);
+            assert_eq!((&s3, &sec3), (&s, &sec), "w {w}, S and sector only");
         }
     }
 }
@@ -74,9 +80,15 @@ fn gradient_row_vector_equals_scalar_for_every_gradient() {
             for c in 0..=255u8 {
                 let r0: Vec<u8> = (0..w).map(|x| if x % 2 == 0 { a } else { b }).collect();
                 let r1: Vec<u8> = (0..w).map(|x| if x % 2 == 0 { c } else { (x / 2) as u8 }).collect();
-                gradient_row(&r0, &r1, &mut s, &mut sec, &mut m8);
+                gradient_row::<true, true>(&r0, &r1, &mut s, &mut sec, &mut m8);
                 gradient_tail(&r0, &r1, &mut s2, &mut sec2, &mut m82, 0);
                 assert!(s == s2 && sec == sec2 && m8 == m82, "a {a} b {b} c {c}");
+                s2.fill(u32::MAX);
+                sec2.fill(9);
+                m82.fill(7);
+                gradient_row::<false, true>(&r0, &r1, &mut s2, &mut sec2, &mut m82);
+                gradient_row::<true, false>(&r0, &r1, &mut s2, &mut sec2, &mut m82);
+                assert!(s == s2 && sec == sec2 && m8 == m82, "passes: a {a} b {b} c {c}");
             }
         }
     }
