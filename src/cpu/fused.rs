@@ -250,7 +250,7 @@ dispatch! {
                 let sc_ = chunk(sc, t0);
                 let o: &mut [u8; CHUNK] = (&mut out[t0..t0 + CHUNK]).try_into().expect("CHUNK bytes");
                 // Most pixels lie below every threshold: such a chunk is all NONE.
-                if sc_.iter().fold(false, |a, &v| a | (v >= th[3])) {
+                if sc_.iter().fold(false, |a, &v| a | (v as i32 >= th[3] as i32)) {
                     let [ul, uc, ur, sl, sr, dl, dc, dr] = [ul, uc, ur, sl, sr, dl, dc, dr].map(|r| chunk(r, t0));
                     let sec = chunk(sec, t0);
                     for t in 0..CHUNK {
@@ -269,9 +269,11 @@ dispatch! {
 /// row-major order, `k` its sector code, `t` its thresholds `[hi, lo, whi, wlo]`.
 #[inline(always)]
 fn class_of_s(n: [u32; 9], k: u8, t: [u32; 4]) -> u8 {
-    let [ul, uc, ur, sl, v, sr, dl, dc, dr] = n;
-    let [hi, lo, whi, wlo] = t;
-    let (k0, k1, k2, k3) = (mask(k == 0), mask(k == 1), mask(k == 2), mask(k == 3));
+    // S <= 2 * 510² and the thresholds <= 510² fit i32: signed compares are
+    // one instruction each in vector lanes, unsigned ones two or three
+    let [ul, uc, ur, sl, v, sr, dl, dc, dr] = n.map(|s| s as i32);
+    let [hi, lo, whi, wlo] = t.map(|s| s as i32);
+    let (k0, k1, k2, k3) = (mask(k == 0) as i32, mask(k == 1) as i32, mask(k == 2) as i32, mask(k == 3) as i32);
     // neighbours across the gradient: `a` must be beaten, `b` matched
     let a = (sl & k0) | (uc & k1) | (ul & k2) | (ur & k3);
     let b = (sr & k0) | (dc & k1) | (dr & k2) | (dl & k3);
