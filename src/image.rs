@@ -216,9 +216,9 @@ pub fn luma_bt601(r: u8, g: u8, b: u8) -> u8 {
 /// blue first), 16 pixels per step: with AVX2 the loads become shuffles and
 /// the sums vector lanes (a 3840x2160 RGB frame: 6 ms, against 16 pixel by pixel).
 #[inline(always)]
-fn luma_blocks<const C: usize>(raw: &[u8]) -> Vec<u8> {
+fn luma_blocks<const C: usize>(raw: &[u8], out: &mut [u8]) {
     let n = raw.len() / C;
-    let mut out = vec![0u8; n];
+    let out = &mut out[..n];
     for (o, i) in out.chunks_exact_mut(16).zip(raw.chunks_exact(16 * C)) {
         let (mut r, mut g, mut b) = ([0u32; 16], [0u32; 16], [0u32; 16]);
         for k in 0..16 {
@@ -233,20 +233,33 @@ fn luma_blocks<const C: usize>(raw: &[u8]) -> Vec<u8> {
     for (o, p) in out[done..].iter_mut().zip(raw[done * C..].chunks_exact(C)) {
         *o = luma_bt601(p[0], p[1], p[2]);
     }
+}
+
+crate::cpu::simd::dispatch! {
+    /// [`luma_bt601`] of every pixel of packed RGB8 bytes, into `out[..raw.len() / 3]`.
+    fn rgb8_to_gray_into(raw: &[u8], out: &mut [u8]) {
+        luma_blocks::<3>(raw, out)
+    }
+}
+
+/// [`luma_bt601`] of every pixel of packed RGB8 bytes.
+fn rgb8_to_gray(raw: &[u8]) -> Vec<u8> {
+    let mut out = vec![0; raw.len() / 3];
+    rgb8_to_gray_into(raw, &mut out);
+    out
+}
+
+/// [`luma_bt601`] of every pixel of packed RGBA8 bytes (alpha ignored).
+fn rgba8_to_gray(raw: &[u8]) -> Vec<u8> {
+    let mut out = vec![0; raw.len() / 4];
+    rgba8_to_gray_into(raw, &mut out);
     out
 }
 
 crate::cpu::simd::dispatch! {
-    /// [`luma_bt601`] of every pixel of packed RGB8 bytes.
-    fn rgb8_to_gray(raw: &[u8]) -> Vec<u8> {
-        luma_blocks::<3>(raw)
-    }
-}
-
-crate::cpu::simd::dispatch! {
-    /// [`luma_bt601`] of every pixel of packed RGBA8 bytes (alpha ignored).
-    fn rgba8_to_gray(raw: &[u8]) -> Vec<u8> {
-        luma_blocks::<4>(raw)
+    /// [`luma_bt601`] of every pixel of packed RGBA8 bytes (alpha ignored), into `out[..raw.len() / 4]`.
+    fn rgba8_to_gray_into(raw: &[u8], out: &mut [u8]) {
+        luma_blocks::<4>(raw, out)
     }
 }
 
@@ -298,7 +311,8 @@ pub fn load_gray(path: impl AsRef<Path>) -> Result<Plane<u8>> {
 /// Reads image files one after another as gray planes, like [`load_gray`],
 /// decoding colour frames (8-bit RGB and RGBA) into one buffer it keeps: a
 /// fresh one is paged in again for every file (a 3840x2160 colour JPEG: 25 MB,
-/// ~6,000 page faults). Gray and other files decode as [`load_gray`] does.
+/// ~6,000 page faults). [`load_into`](Self::load_into) also takes the
+/// buffer of the gray plane, from a plane that is done with.
 ///
 /// ```no_run
 /// let mut loader = lfast::image::GrayLoader::default();
@@ -317,6 +331,14 @@ impl GrayLoader {
     /// The gray plane of the image file at `path`; the buffer it decoded
     /// into stays for the next file.
     pub fn load(&mut self, path: impl AsRef<Path>) -> Result<Plane<u8>> {
+        self.load_into(path, Vec::new())
+    }
+
+    /// [`load`](Self::load) with the plane's pixels in `out`'s allocation (a
+    /// spent plane's `data`): 8-bit gray and colour files then allocate
+    /// nothing once the buffers are large enough. `out` is dropped for
+    /// other files, and for one more than twice the size the image needs.
+    pub fn load_into(&mut self, path: impl AsRef<Path>, mut out: Vec<u8>) -> Result<Plane<u8>> {
         use image::{ColorType, ImageDecoder};
         let path = path.as_ref();
         let io = |source| Error::Io { path: path.to_path_buf(), source };
@@ -329,21 +351,33 @@ impl GrayLoader {
         limits.reserve(decoder.total_bytes()).map_err(img_err)?;
         decoder.set_limits(limits).map_err(img_err)?;
         let colour = decoder.color_type();
-        if !matches!(colour, ColorType::Rgb8 | ColorType::Rgba8) {
+        if !matches!(colour, ColorType::L8 | ColorType::Rgb8 | ColorType::Rgba8) {
             return into_gray(image::DynamicImage::from_decoder(decoder).map_err(img_err)?);
         }
         let (w, h) = decoder.dimensions();
         check_size(w, h)?;
         // within the limits' 1 GiB: the reservation above passed
-        let n = decoder.total_bytes() as usize;
-        if self.colour.capacity() > 2 * n {
-            // not kept past a much smaller file: one huge frame would pin its buffer
-            self.colour = Vec::new();
+        let (bytes, px) = (decoder.total_bytes() as usize, w as usize * h as usize);
+        let fit = |v: &mut Vec<u8>, n: usize| {
+            if v.capacity() > 2 * n {
+                // not kept past a much smaller file: one huge frame would pin its buffer
+                *v = Vec::new();
+            }
+            v.resize(n, 0);
+        };
+        fit(&mut out, px);
+        if colour == ColorType::L8 {
+            decoder.read_image(&mut out).map_err(img_err)?;
+        } else {
+            fit(&mut self.colour, bytes);
+            decoder.read_image(&mut self.colour).map_err(img_err)?;
+            if colour == ColorType::Rgb8 {
+                rgb8_to_gray_into(&self.colour, &mut out);
+            } else {
+                rgba8_to_gray_into(&self.colour, &mut out);
+            }
         }
-        self.colour.resize(n, 0);
-        decoder.read_image(&mut self.colour).map_err(img_err)?;
-        let gray = if colour == ColorType::Rgb8 { rgb8_to_gray(&self.colour) } else { rgba8_to_gray(&self.colour) };
-        Plane::from_vec(w, h, gray)
+        Plane::from_vec(w, h, out)
     }
 }
 
@@ -442,16 +476,20 @@ mod tests {
         std::fs::write(&broken, &std::fs::read(&files[1]).unwrap()[..400]).unwrap();
         files.insert(3, broken.clone());
         let mut loader = GrayLoader::default();
+        // the second round hands the previous plane's buffer back, as lfast detect's decoders do
+        let mut spent = Vec::new();
         for round in 0..2 {
             for f in &files {
-                let got = loader.load(f);
+                let got = if round == 0 { loader.load(f) } else { loader.load_into(f, std::mem::take(&mut spent)) };
                 if *f == broken {
                     let e = got.unwrap_err().to_string();
                     assert!(e.contains("broken.png"), "{e}");
                     continue;
                 }
                 let want = to_gray(&image::open(f).unwrap()).unwrap();
-                assert_eq!(got.unwrap(), want, "{} (round {round})", f.display());
+                let got = got.unwrap();
+                assert_eq!(got, want, "{} (round {round})", f.display());
+                spent = got.data;
             }
         }
     }

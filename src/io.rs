@@ -80,29 +80,45 @@ pub fn frame_features_json(
     kps: &[KeyPoint],
     desc: &[Descriptor],
 ) -> String {
+    let mut out = String::new();
+    frame_features_json_into(&mut out, image, frame, width, height, kps, desc);
+    out
+}
+
+/// [`frame_features_json`] appended to `out`: a writer that keeps one
+/// `String` for every frame allocates (and pages in) nothing once it is large enough.
+pub fn frame_features_json_into(
+    out: &mut String,
+    image: &Path,
+    frame: Option<&FrameInfo>,
+    width: u32,
+    height: u32,
+    kps: &[KeyPoint],
+    desc: &[Descriptor],
+) {
     use std::fmt::Write as _;
-    let mut out = String::with_capacity(256 + kps.len() * 240 + desc.len() * 72);
+    out.reserve(256 + kps.len() * 240 + desc.len() * 72);
     out.push_str("{\n  \"image\": ");
-    json_str(&mut out, &image.display().to_string());
+    json_str(out, &image.display().to_string());
     let _ = write!(out, ",\n  \"width\": {width},\n  \"height\": {height},\n  \"keypoints\": [");
     for (i, k) in kps.iter().enumerate() {
         out.push_str(if i == 0 { "\n" } else { ",\n" });
         out.push_str("    {\n      \"pt\": [\n        ");
-        json_f32(&mut out, k.pt.x);
+        json_f32(out, k.pt.x);
         out.push_str(",\n        ");
-        json_f32(&mut out, k.pt.y);
+        json_f32(out, k.pt.y);
         out.push_str("\n      ],\n      \"size\": ");
-        json_f32(&mut out, k.size);
+        json_f32(out, k.size);
         out.push_str(",\n      \"angle\": ");
-        json_f32(&mut out, k.angle);
+        json_f32(out, k.angle);
         out.push_str(",\n      \"response\": ");
-        json_f32(&mut out, k.response);
+        json_f32(out, k.response);
         let _ = write!(out, ",\n      \"octave\": {},\n      \"class_id\": {}\n    }}", k.octave, k.class_id);
     }
     out.push_str(if kps.is_empty() { "],\n  \"descriptors\": [" } else { "\n  ],\n  \"descriptors\": [" });
     for (i, d) in desc.iter().enumerate() {
         out.push_str(if i == 0 { "\n    \"" } else { ",\n    \"" });
-        push_hex(&mut out, d);
+        push_hex(out, d);
         out.push('"');
     }
     out.push_str(if desc.is_empty() { "]" } else { "\n  ]" });
@@ -110,7 +126,7 @@ pub fn frame_features_json(
         out.push_str(",\n  \"frame\": {\n    ");
         if let Some(t) = &f.topic {
             out.push_str("\"topic\": ");
-            json_str(&mut out, t);
+            json_str(out, t);
             out.push_str(",\n    ");
         }
         let _ = write!(out, "\"index\": {},\n    \"time_ns\": {}", f.index, f.time_ns);
@@ -120,7 +136,6 @@ pub fn frame_features_json(
         out.push_str("\n  }");
     }
     out.push_str("\n}");
-    out
 }
 
 /// A JSON string as serde_json escapes it.

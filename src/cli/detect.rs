@@ -16,6 +16,7 @@ use crate::{Descriptor, KeyPoint};
 use clap::ValueEnum;
 use rayon::iter::{ParallelBridge, ParallelIterator};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::sync_channel;
 
@@ -157,6 +158,12 @@ struct Job<'a> {
 /// that fails on cue in tests.
 pub(super) type Write<'a> = &'a dyn Fn(&Path, &[u8]) -> crate::Result<()>;
 
+thread_local! {
+    /// The JSON text of the writer thread's frames, one buffer for all (a
+    /// 3840x2160 frame's is ~9 MB, paged in anew when allocated per frame).
+    static JSON: std::cell::RefCell<String> = const { std::cell::RefCell::new(String::new()) };
+}
+
 /// Encodes and writes every per-file output of `image` (a frame of it when
 /// `frame` says), through `write`.
 pub(super) fn write_all(
@@ -179,7 +186,11 @@ pub(super) fn write_all(
     };
     for f in formats {
         match f {
-            Format::Json => put(crate::io::frame_features_json(image, frame, *width, *height, kps, desc).as_bytes())?,
+            Format::Json => JSON.with_borrow_mut(|json| {
+                json.clear();
+                crate::io::frame_features_json_into(json, image, frame, *width, *height, kps, desc);
+                put(json.as_bytes())
+            })?,
             Format::Csv => put(crate::io::features_csv(kps, desc).as_bytes())?,
             Format::Npy => {
                 put(&crate::io::keypoints_npy(kps))?;
@@ -240,8 +251,12 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
     // set when the disk is full: no file is taken after it
     let stop = AtomicBool::new(false);
     let (skip_existing, draw) = (a.skip_existing, a.draw);
+    // the gray planes' buffers once detected, for the decoders to fill again:
+    // a 3840x2160 frame's 8 MB would otherwise be paged in anew for each file
+    let spent = Mutex::new(Vec::<Vec<u8>>::new());
+    let keep_spent = decoders + 3 * threads;
     std::thread::scope(|s| {
-        let (jobs, next, det, stop) = (&jobs, &next, &det, &stop);
+        let (jobs, next, det, stop, spent) = (&jobs, &next, &det, &stop, &spent);
         let (tx_dec, rx_dec) = sync_channel::<(usize, Stage)>(2 * threads);
         let (tx_det, rx_det) = sync_channel::<(usize, Stage)>(2 * threads);
         // stage 1: decode
@@ -260,7 +275,8 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
                     } else if skip_existing && job.outputs.iter().all(|p| p.is_file()) {
                         Stage::Skip
                     } else {
-                        match loader.load(&job.input.path) {
+                        let buf = spent.lock().ok().and_then(|mut v| v.pop()).unwrap_or_default();
+                        match loader.load_into(&job.input.path, buf) {
                             Ok(img) => Stage::Decoded(img),
                             Err(e) => Stage::Failed(report::reason(&e)),
                         }
@@ -278,13 +294,20 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
                 rx_dec.into_iter().par_bridge().for_each(|(i, st)| {
                     let st = match st {
                         Stage::Decoded(img) => match det.detect_and_compute(&img) {
-                            Ok((kps, desc)) => Stage::Detected(Detected {
-                                width: img.width,
-                                height: img.height,
-                                kps,
-                                desc,
-                                img: draw.then_some(img),
-                            }),
+                            Ok((kps, desc)) => {
+                                let (width, height) = (img.width, img.height);
+                                let img = if draw {
+                                    Some(img)
+                                } else {
+                                    if let Ok(mut v) = spent.lock()
+                                        && v.len() < keep_spent
+                                    {
+                                        v.push(img.data);
+                                    }
+                                    None
+                                };
+                                Stage::Detected(Detected { width, height, kps, desc, img })
+                            }
                             Err(e) => Stage::Failed(report::reason(&e)),
                         },
                         other => other,
