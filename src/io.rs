@@ -387,13 +387,8 @@ mod tests {
 
     #[test]
     fn features_json_is_serde_pretty_byte_for_byte() {
-        let mut s = 0x9e37_79b9u32;
-        let mut next = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s
-        };
+        let mut rng = crate::rng::SplitMix64::new(7);
+        let mut next = move || rng.next_u64() as u32;
         // every class of f32: random bits (NaN and infinities too), integers, tiny, huge, signed zeros
         let mut specials = vec![0.0f32, -0.0, 1.0, -1.0, 31.0, 359.99997, 1e-45, f32::MIN_POSITIVE, f32::MAX, f32::MIN];
         specials.extend([f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.1, 1e7, 1.5e16, 123456.79, -1.1754944e-38]);
