@@ -36,7 +36,15 @@ impl<T: Copy + Default> Plane<T> {
     pub fn reshape(&mut self, width: u32, height: u32) {
         self.width = width;
         self.height = height;
-        self.data.resize(width as usize * height as usize, T::default());
+        let n = width as usize * height as usize;
+        if n > self.data.capacity() {
+            // The old pixels need not survive: a fresh zeroed allocation (calloc,
+            // whose new pages come zeroed) instead of copying them over and
+            // clearing the rest, which touched each new page twice.
+            self.data = vec![T::default(); n];
+        } else {
+            self.data.resize(n, T::default());
+        }
     }
 }
 
@@ -359,11 +367,14 @@ impl GrayLoader {
         // within the limits' 1 GiB: the reservation above passed
         let (bytes, px) = (decoder.total_bytes() as usize, w as usize * h as usize);
         let fit = |v: &mut Vec<u8>, n: usize| {
-            if v.capacity() > 2 * n {
-                // not kept past a much smaller file: one huge frame would pin its buffer
-                *v = Vec::new();
+            // a fresh zeroed allocation when it must grow (its pages come
+            // zeroed: no copy, no clearing), or when it is more than twice
+            // the size (one huge frame would pin its buffer); else reused
+            if v.capacity() < n || v.capacity() > 2 * n {
+                *v = vec![0; n];
+            } else {
+                v.resize(n, 0);
             }
-            v.resize(n, 0);
         };
         fit(&mut out, px);
         if colour == ColorType::L8 {

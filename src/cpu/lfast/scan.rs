@@ -102,9 +102,10 @@ fn cols3(row: &[u8], n: usize) -> [&[u8]; 3] {
 pub(super) fn support_map_into(e: &Plane<u8>, support: u32, s: &mut Vec<u8>) {
     use rayon::prelude::*;
     let (w, h) = (e.width as usize, e.height as usize);
-    // a smaller level after a larger one clears nothing
+    // a smaller level after a larger one clears nothing; a larger one takes
+    // a fresh zeroed allocation (no copy of the old map, no clearing)
     if s.len() < w * h {
-        s.resize(w * h, 0);
+        *s = vec![0; w * h];
     }
     if w >= 3 && h >= 3 {
         s[w..(h - 1) * w].par_chunks_mut(w).enumerate().for_each(|(k, out)| {
