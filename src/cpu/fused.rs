@@ -8,12 +8,13 @@
 //! 1. per cell row: median rows -> D (plus the next band's first row,
 //!    recomputed), then
 //! 2. LSD gradient rows -> M8 + cell histograms, and S and the direction
-//!    sector in padded planes on a small level (see [`KEEP_GRADIENT_MAX`])
+//!    sector in padded planes on a small level (see [`KEEP_GRADIENT_MAX`];
+//!    a large level's rows here compute M8 alone)
 //! 3. Otsu and window statistics from the cell histograms (tiny), turned into
 //!    four integer thresholds on S per run of columns: S >= hi is STRONG, >= lo WEAK_STRONG, ...
 //! 4. per band of rows: S and sector rows from those planes, or on a large
 //!    level the gradient rows of D again into a ring of three padded S and
-//!    sector rows; NMS + classification into a ring of three padded class
+//!    sector rows (S and the sector alone); NMS + classification into a ring of three padded class
 //!    rows, rules rows -> ruled classes in E and the list of WEAK pixels, then
 //!    hysteresis within the band
 //! 5. hysteresis across the bands' seams -> E
