@@ -70,8 +70,8 @@ pub fn features_json(image: &Path, width: u32, height: u32, kps: &[KeyPoint], de
 /// The JSON text of the features of one image file (`frame` = `None`) or of
 /// one frame of the recording `image`: [`Features`] as `serde_json::to_string_pretty`
 /// lays it out, byte for byte, written directly (a 3840x2160 frame's 20,000
-/// keypoints make ~9 MB of it: ~5x faster than through serde's pretty printer,
-/// with no copy of the keypoints and no string per descriptor).
+/// keypoints make ~9 MB of it: in about half the time serde's pretty printer
+/// took, with no copy of the keypoints and no string per descriptor).
 pub fn frame_features_json(
     image: &Path,
     frame: Option<&FrameInfo>,
