@@ -2,7 +2,7 @@
 //! [`is_corner`](super::is_corner), with fewer instructions. Per chunk of 32
 //! pixels of a row it builds all 32 circle masks at once (16 compares of 32
 //! bytes, which LLVM vectorises), then decides each edge pixel of the chunk
-//! from its mask. Step 4 is one byte read from a support map, computed for
+//! from its mask (in paper mode all 32 at once, [`paper_bits`]). Step 4 is one byte read from a support map, computed for
 //! every pixel beforehand in one vectorised pass ([`support_map_into`]).
 //! Reads go through [`Window`], which checks once per row what every read relies on.
 
@@ -154,6 +154,26 @@ pub(super) fn decide(mask: u32, sup: u32, p: &LfastParams, mids: &[u16; 65536]) 
     }
 }
 
+/// [`decide`] in paper mode for 32 pixels at once, in u16 lanes (LLVM
+/// vectorises the loop): bit j set where `masks[j]`, `sups[j]` make a
+/// corner. With `s = mask & sup`, "two supported" is `s & (s - 1) != 0`, and
+/// it implies n >= 2; the one case it then leaves out, exactly two points
+/// and opposite (bits t and t + 8), is `lo == hi` with one bit in `lo` (the
+/// mask's low and high bytes). Checked against [`decide`] in
+/// `tests::paper_bits_equals_decide`.
+#[inline(always)]
+fn paper_bits(masks: &[u16; CHUNK], sups: &[u16; CHUNK]) -> u32 {
+    let mut ok = [0u8; CHUNK];
+    for (o, (&m, &sup)) in ok.iter_mut().zip(masks.iter().zip(sups)) {
+        let s = m & sup;
+        let (lo, hi) = (m & 0xff, m >> 8);
+        let two_supported = s & s.wrapping_sub(1) != 0;
+        let two_opposite = (lo == hi) & (lo & lo.wrapping_sub(1) == 0);
+        *o = (two_supported & !two_opposite) as u8;
+    }
+    eq_bits(&ok, 1)
+}
+
 /// Circle masks of the 32 pixels `xs..xs+32` of the window's row.
 ///
 /// # Safety
@@ -272,11 +292,20 @@ dispatch! {
             if bits != 0 {
                 // SAFETY: as above; AVX2 only from the AVX2 build
                 let (masks, sups) = unsafe { (chunk_masks::<AVX2>(win, xs), chunk_supports::<AVX2>(win, xs)) };
-                while bits != 0 {
-                    let j = bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    if decide(masks[j] as u32, sups[j] as u32, p, mids) {
-                        out.push([(xs + j) as u32, y]);
+                if p.mode == Mode::Paper {
+                    // all 32 decisions at once, then only the corners visited
+                    bits &= paper_bits(&masks, &sups);
+                    while bits != 0 {
+                        out.push([(xs + bits.trailing_zeros() as usize) as u32, y]);
+                        bits &= bits - 1;
+                    }
+                } else {
+                    while bits != 0 {
+                        let j = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        if decide(masks[j] as u32, sups[j] as u32, p, mids) {
+                            out.push([(xs + j) as u32, y]);
+                        }
                     }
                 }
             }
@@ -337,6 +366,29 @@ mod tests {
             for v in [EDGE, 1, 0] {
                 // SAFETY: AVX2 checked above
                 assert_eq!(unsafe { bit_masks_avx2(&refs, v) }, bit_masks(&refs, v), "round {round} value {v}");
+            }
+        }
+    }
+
+    #[test]
+    fn paper_bits_equals_decide() {
+        let p = LfastParams { mode: Mode::Paper, support: 3, straight_tol: 1, border: 7 };
+        let mids = branch_mids();
+        let mut r = SplitMix64::new(11);
+        // every mask, each with supports: none, all, itself, random, random subsets of it
+        for chunk in 0..65536 / CHUNK {
+            let masks: [u16; CHUNK] = std::array::from_fn(|j| (chunk * CHUNK + j) as u16);
+            for k in 0..8 {
+                let sups: [u16; CHUNK] = std::array::from_fn(|j| match k {
+                    0 => 0,
+                    1 => u16::MAX,
+                    2 => masks[j],
+                    3 | 4 => r.next_u64() as u16,
+                    _ => masks[j] & r.next_u64() as u16 & r.next_u64() as u16,
+                });
+                let want =
+                    (0..CHUNK).fold(0u32, |b, j| b | (decide(masks[j] as u32, sups[j] as u32, &p, mids) as u32) << j);
+                assert_eq!(paper_bits(&masks, &sups), want, "masks from {} sups kind {k}", chunk * CHUNK);
             }
         }
     }
