@@ -88,7 +88,7 @@ dispatch! {
 /// [`harris`] at the 3x3 square centred on (x, y): `out[j][i]` at
 /// (x - 1 + i, y - 1 + j). `None` unless the square's footprint, x-5..=x+5 by
 /// y-5..=y+5, lies inside the image. The nine 7x7 blocks overlap: their
-/// gradients are computed once and summed by columns (`sums_3x3`).
+/// gradients are computed once and summed by columns (`rect_3x3`).
 ///
 /// ```
 /// use lfast::{Plane, cpu::response::{harris, harris_3x3}};
@@ -98,7 +98,7 @@ dispatch! {
 /// assert!(harris_3x3(&img, 7, 5).is_none()); // x + 5 = 12 is outside
 /// ```
 pub fn harris_3x3(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 3]; 3]> {
-    harris_rect::<11, 3, 3>(img, x.checked_sub(1)?, y.checked_sub(1)?, sums_3x3)
+    harris_rect::<11, 3, 3>(img, x.checked_sub(1)?, y.checked_sub(1)?, rect_3x3)
 }
 
 /// [`harris`] at the 7x7 square centred on (x, y), as [`harris_3x3`]:
@@ -114,14 +114,15 @@ pub fn harris_3x3(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 3]; 3]> {
 /// assert!(harris_7x7(&img, 11, 8).is_none()); // x + 7 = 18 is outside
 /// ```
 pub fn harris_7x7(img: &Plane<u8>, x: u32, y: u32) -> Option<[[f32; 7]; 7]> {
-    harris_rect::<15, 7, 7>(img, x.checked_sub(3)?, y.checked_sub(3)?, sums_7x7)
+    harris_rect::<15, 7, 7>(img, x.checked_sub(3)?, y.checked_sub(3)?, rect_7x7)
 }
 
-/// A kernel of [`sums_rect`]: the footprint rows in, `[a, b, c]` of each block out.
-type RectSums<const F: usize, const SY: usize, const SX: usize> = fn(&[[u8; 18]; F]) -> [[[i32; SX]; SY]; 3];
+/// A kernel of [`harris_rect`]: the footprint rows in, the responses of the
+/// rectangle out ([`rect_responses`] of [`sums_rect`]).
+type RectKernel<const F: usize, const SY: usize, const SX: usize> = fn(&[[u8; 18]; F]) -> [[f32; SX]; SY];
 
 /// [`harris`] at the `SY x SX` pixels whose top-left is (x0, y0), `out[j][i]`
-/// at (x0 + i, y0 + j), through `sums` from the footprint x0-4..x0+SX+4 by
+/// at (x0 + i, y0 + j), through `kernel` from the footprint x0-4..x0+SX+4 by
 /// y0-4..y0+SY+4 (`F = SY + 8` rows of `SX + 8` pixels); `None` where the
 /// footprint leaves the image.
 #[inline(always)]
@@ -129,7 +130,7 @@ fn harris_rect<const F: usize, const SY: usize, const SX: usize>(
     img: &Plane<u8>,
     x0: u32,
     y0: u32,
-    sums: RectSums<F, SY, SX>,
+    kernel: RectKernel<F, SY, SX>,
 ) -> Option<[[f32; SX]; SY]> {
     let (w, h) = (img.width as usize, img.height as usize);
     let (x0, y0) = (x0 as usize, y0 as usize);
@@ -140,8 +141,20 @@ fn harris_rect<const F: usize, const SY: usize, const SX: usize>(
     for (k, row) in rows.iter_mut().enumerate() {
         row[..SX + 8].copy_from_slice(&img.data[(y0 - 4 + k) * w + x0 - 4..][..SX + 8]);
     }
-    let [a, b, c] = sums(&rows);
-    Some(std::array::from_fn(|j| std::array::from_fn(|i| harris_from_sums(a[j][i], b[j][i], c[j][i]))))
+    Some(kernel(&rows))
+}
+
+/// [`harris_from_sums`] of each block of [`sums_rect`]'s `[a, b, c]`, over
+/// the flattened rectangle so that the AVX2 build computes 8 at a time (the
+/// same f32 operations in the same order: bit-identical).
+#[inline(always)]
+fn rect_responses<const SY: usize, const SX: usize>(sums: &[[[i32; SX]; SY]; 3]) -> [[f32; SX]; SY] {
+    let mut out = [[0f32; SX]; SY];
+    let [a, b, c] = sums.each_ref().map(|p| p.as_flattened());
+    for (k, o) in out.as_flattened_mut().iter_mut().enumerate() {
+        *o = harris_from_sums(a[k], b[k], c[k]);
+    }
+    out
 }
 
 /// The structure-tensor sums `[a, b, c]` of the 7x7 blocks centred on the
@@ -202,16 +215,16 @@ fn sums_rect<const F: usize, const G: usize, const SY: usize, const SX: usize>(
 }
 
 dispatch! {
-    /// [`sums_rect`] of the 3x3 square (11-row footprint).
-    fn sums_3x3(rows: &[[u8; 18]; 11]) -> [[[i32; 3]; 3]; 3] {
-        sums_rect::<11, 9, 3, 3>(rows)
+    /// The responses of the 3x3 square (11-row footprint): [`rect_responses`] of [`sums_rect`].
+    fn rect_3x3(rows: &[[u8; 18]; 11]) -> [[f32; 3]; 3] {
+        rect_responses(&sums_rect::<11, 9, 3, 3>(rows))
     }
 }
 
 dispatch! {
-    /// [`sums_rect`] of a 1x8 strip (9-row footprint).
-    fn sums_strip(rows: &[[u8; 18]; 9]) -> [[[i32; 8]; 1]; 3] {
-        sums_rect::<9, 7, 1, 8>(rows)
+    /// The responses of a 1x8 strip (9-row footprint): [`rect_responses`] of [`sums_rect`].
+    fn rect_strip(rows: &[[u8; 18]; 9]) -> [[f32; 8]; 1] {
+        rect_responses(&sums_rect::<9, 7, 1, 8>(rows))
     }
 }
 
@@ -229,13 +242,13 @@ pub const STRIP: u32 = 8;
 /// assert!(harris_strip(&img, 9, 5).is_none()); // x + 11 = 20 is outside
 /// ```
 pub fn harris_strip(img: &Plane<u8>, x: u32, y: u32) -> Option<[f32; 8]> {
-    harris_rect::<9, 1, 8>(img, x, y, sums_strip).map(|[row]| row)
+    harris_rect::<9, 1, 8>(img, x, y, rect_strip).map(|[row]| row)
 }
 
 dispatch! {
-    /// [`sums_rect`] of the 7x7 square (15-row footprint).
-    fn sums_7x7(rows: &[[u8; 18]; 15]) -> [[[i32; 7]; 7]; 3] {
-        sums_rect::<15, 13, 7, 7>(rows)
+    /// The responses of the 7x7 square (15-row footprint): [`rect_responses`] of [`sums_rect`].
+    fn rect_7x7(rows: &[[u8; 18]; 15]) -> [[f32; 7]; 7] {
+        rect_responses(&sums_rect::<15, 13, 7, 7>(rows))
     }
 }
 
