@@ -225,6 +225,15 @@ fn backends_and_adapters() {
     assert!(o.status.success(), "{}", show(&o));
     let s = stdout(&o);
     assert!(s.contains("GPU adapters found") && s.contains("rayon threads") && s.contains("avx2"), "{s}");
+    assert!(s.contains("CPU kernels: the "), "{s}");
+    // LFAST_SIMD caps the kernels' build; a value it does not know is named and ignored
+    for (v, want) in [
+        ("baseline", "CPU kernels: the baseline build, of "),
+        ("avx3", "(LFAST_SIMD=avx3 is not baseline, avx2 or avx512: ignored)"),
+    ] {
+        let o = common::command(&[&"info"], &[("LFAST_SIMD", v)]).output().expect("the lfast binary runs");
+        assert!(o.status.success() && stdout(&o).contains(want), "LFAST_SIMD={v}: {}", show(&o));
+    }
     // --size: the workspace of each size, computed without a GPU; a size that does not fit
     // wgpu's defaults names the limit; a malformed size is a usage error
     let o = lfast(&[&"info", &"--size", &"1241x376,4000x3000"]);

@@ -96,15 +96,35 @@ pub(super) fn run(adapter: Option<String>, sizes: &[(u32, u32)], config: Option<
     }
     println!("rayon threads: {}", rayon::current_num_threads());
     println!("CPU features: {}", cpu_features());
+    println!("{}", simd_line());
     print_workspaces(&cfg, sizes, limits.as_ref())?;
     Ok(true)
+}
+
+/// Which build of the row kernels runs, and why (`LFAST_SIMD`).
+fn simd_line() -> String {
+    use crate::cpu::simd::{Tier, detected_tier, tier};
+    let name = |t: Tier| match t {
+        Tier::Baseline => "baseline",
+        Tier::Avx2 => "avx2",
+        Tier::Avx512 => "avx512",
+    };
+    let (run, best) = (tier(), detected_tier());
+    let why = match std::env::var("LFAST_SIMD") {
+        Err(std::env::VarError::NotPresent) => String::new(),
+        Ok(v) if ["baseline", "avx2", "avx512"].contains(&v.as_str()) => format!(" (LFAST_SIMD={v})"),
+        Ok(v) => format!(" (LFAST_SIMD={v} is not baseline, avx2 or avx512: ignored)"),
+        Err(_) => " (LFAST_SIMD is not UTF-8: ignored)".into(),
+    };
+    format!("CPU kernels: the {} build, of {} this CPU allows{why}", name(run), name(best))
 }
 
 #[cfg(target_arch = "x86_64")]
 fn cpu_features() -> String {
     let yn = |b: bool| if b { "yes" } else { "no" };
     format!(
-        "x86_64, avx2 {}, fma {}, sse4.1 {}",
+        "x86_64, avx512 (F, BW, CD, DQ, VL) {}, avx2 {}, fma {}, sse4.1 {}",
+        yn(crate::cpu::simd::detected_tier() == crate::cpu::simd::Tier::Avx512),
         yn(std::arch::is_x86_feature_detected!("avx2")),
         yn(std::arch::is_x86_feature_detected!("fma")),
         yn(std::arch::is_x86_feature_detected!("sse4.1"))

@@ -1,21 +1,27 @@
 //! Runtime CPU-feature dispatch for the hot row kernels: the kernel is written
-//! once as plain loops (so it reads like its shader) and compiled twice, for
-//! the baseline target and with AVX2 enabled, which lets LLVM vectorise it
-//! 8 or 16 lanes wide on machines that have it. No code is AVX2-only.
+//! once as plain loops (so it reads like its shader) and compiled three times,
+//! for the baseline target, with AVX2 and with AVX-512 enabled, which lets
+//! LLVM vectorise it 8, 16 or 32 lanes wide on machines that have them. No
+//! code is AVX2- or AVX-512-only, and every build computes the same integers
+//! and the same f32 operations in the same order: the outputs are bit-identical
+//! whichever runs (`simd::tests::every_tier_gives_the_same_features`).
 
-/// Defines `fn $name(args) -> ret` that runs `$body`, using an AVX2+FMA build
-/// of it (with the bit instructions every AVX2 CPU has: `popcnt`, `lzcnt`,
-/// BMI1/2, so that `count_ones` and friends are one instruction) when the CPU
-/// has those features.
+use std::sync::atomic::{AtomicU8, Ordering};
+
+/// Defines `fn $name(args) -> ret` that runs `$body`, using the build of it
+/// for the [`tier`] this process runs: AVX-512 (x86-64-v4: F, BW, CD, DQ,
+/// VL) or AVX2+FMA, each with the bit instructions every such CPU has
+/// (`popcnt`, `lzcnt`, BMI1/2, so that `count_ones` and friends are one
+/// instruction), else the baseline.
 macro_rules! dispatch {
     ($(#[$m:meta])* $vis:vis fn $name:ident($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
         $crate::cpu::simd::dispatch! {
             $(#[$m])* $vis fn $name<const _AVX2>($($arg: $ty),*) $(-> $ret)? $body
         }
     };
-    // `fn name<const FLAG>(..)`: the body sees `FLAG`, true in the AVX2 build
-    // only, to call hand-written AVX2 code (`#[target_feature(enable = "avx2")]`
-    // functions inline into that build).
+    // `fn name<const FLAG>(..)`: the body sees `FLAG`, true in the AVX2 and
+    // AVX-512 builds only, to call hand-written AVX2 code
+    // (`#[target_feature(enable = "avx2")]` functions inline into both).
     ($(#[$m:meta])* $vis:vis fn $name:ident<const $flag:ident>($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
         $(#[$m])*
         $vis fn $name($($arg: $ty),*) $(-> $ret)? {
@@ -23,11 +29,16 @@ macro_rules! dispatch {
             fn inner<const $flag: bool>($($arg: $ty),*) $(-> $ret)? $body
             #[cfg(target_arch = "x86_64")]
             {
+                #[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl,avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+                fn avx512($($arg: $ty),*) $(-> $ret)? { inner::<true>($($arg),*) }
                 #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
                 fn avx2($($arg: $ty),*) $(-> $ret)? { inner::<true>($($arg),*) }
-                if $crate::cpu::simd::has_avx2() {
-                    // SAFETY: the CPU has these features, checked just above.
-                    return unsafe { avx2($($arg),*) };
+                match $crate::cpu::simd::tier() {
+                    // SAFETY: the CPU has these features (`tier` never exceeds `detected_tier`).
+                    $crate::cpu::simd::Tier::Avx512 => return unsafe { avx512($($arg),*) },
+                    // SAFETY: as above.
+                    $crate::cpu::simd::Tier::Avx2 => return unsafe { avx2($($arg),*) },
+                    $crate::cpu::simd::Tier::Baseline => {}
                 }
             }
             inner::<false>($($arg),*)
@@ -36,17 +47,67 @@ macro_rules! dispatch {
 }
 pub(crate) use dispatch;
 
-/// Whether the CPU has what [`dispatch!`]'s fast build is compiled for: AVX2,
-/// FMA, `popcnt`, `lzcnt`, BMI1 and BMI2 (each detection is cached by std).
-#[cfg(target_arch = "x86_64")]
+/// The builds of a [`dispatch!`] kernel, in order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Tier {
+    /// The target's baseline (SSE2 on x86-64).
+    Baseline = 1,
+    /// AVX2, FMA, `popcnt`, `lzcnt`, BMI1, BMI2.
+    Avx2 = 2,
+    /// The AVX2 tier's features and AVX-512 F, BW, CD, DQ and VL (x86-64-v4).
+    Avx512 = 3,
+}
+
+/// The tier the kernels run, as a `Tier` number; 0 until first read.
+static TIER: AtomicU8 = AtomicU8::new(0);
+
+/// The best tier this CPU has.
+pub fn detected_tier() -> Tier {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::is_x86_feature_detected as has;
+        let avx2 = has!("avx2") && has!("fma") && has!("popcnt") && has!("lzcnt") && has!("bmi1") && has!("bmi2");
+        let avx512 = has!("avx512f") && has!("avx512bw") && has!("avx512cd") && has!("avx512dq") && has!("avx512vl");
+        if avx2 && avx512 {
+            return Tier::Avx512;
+        }
+        if avx2 {
+            return Tier::Avx2;
+        }
+    }
+    Tier::Baseline
+}
+
+/// The tier the kernels run: the CPU's best, at most the one the
+/// environment variable `LFAST_SIMD` names (`baseline`, `avx2`, `avx512`;
+/// read once), to compare the builds' speed or to rule one out.
 #[inline(always)]
-pub(crate) fn has_avx2() -> bool {
-    std::is_x86_feature_detected!("avx2")
-        && std::is_x86_feature_detected!("fma")
-        && std::is_x86_feature_detected!("popcnt")
-        && std::is_x86_feature_detected!("lzcnt")
-        && std::is_x86_feature_detected!("bmi1")
-        && std::is_x86_feature_detected!("bmi2")
+pub fn tier() -> Tier {
+    match TIER.load(Ordering::Relaxed) {
+        3 => Tier::Avx512,
+        2 => Tier::Avx2,
+        1 => Tier::Baseline,
+        _ => {
+            let cap = match std::env::var("LFAST_SIMD").as_deref() {
+                Ok("baseline") => Tier::Baseline,
+                Ok("avx2") => Tier::Avx2,
+                _ => Tier::Avx512,
+            };
+            let t = detected_tier().min(cap);
+            TIER.store(t as u8, Ordering::Relaxed);
+            t
+        }
+    }
+}
+
+/// Runs the kernels at `t` (at most the CPU's best) from now on, in every
+/// thread, and returns the tier set: the tests compare the tiers' outputs
+/// (which are equal, so tests running meanwhile are not disturbed).
+#[cfg(test)]
+pub(crate) fn set_tier(t: Tier) -> Tier {
+    let t = detected_tier().min(t);
+    TIER.store(t as u8, Ordering::Relaxed);
+    t
 }
 
 /// Pixels per chunk of the chunked row kernels (32 bytes: one AVX2 register of u8).
@@ -137,6 +198,105 @@ pub(crate) fn for_each_eq(v: &[u8], value: u8, mut f: impl FnMut(usize)) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Features of every image at every tier this CPU has (and, as the
+    /// builds are selected per process, the baseline and AVX2 builds on an
+    /// AVX-512 machine): bit-identical keypoints and descriptors, in four
+    /// configs, with and without a mask, on sizes around the 16-, 32- and
+    /// 64-byte vector widths, and the colour conversion of a colour file.
+    #[test]
+    fn every_tier_gives_the_same_features() {
+        use crate::cpu::CpuDetector;
+        use crate::image::Plane;
+        use crate::{Config, DescriptorKind, Mode};
+        let data = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/");
+        let mut images: Vec<Plane<u8>> = ["coins.png", "text.png", "astronaut_256.png"]
+            .iter()
+            .map(|f| crate::image::load_gray(format!("{data}{f}")).expect("test image"))
+            .collect();
+        // blocks on a ramp with noise, at widths around the vector sizes
+        let mut r = crate::rng::SplitMix64::new(5);
+        for (w, h) in [(97u32, 80u32), (127, 65), (193, 71), (321, 49)] {
+            let blocks: Vec<[u64; 5]> = (0..12).map(|_| std::array::from_fn(|_| r.next_u64())).collect();
+            let data = (0..w * h)
+                .map(|i| {
+                    let (x, y) = ((i % w) as u64, (i / w) as u64);
+                    let mut v = (x * 200 / w as u64) as u8 / 2 + (r.next_u64() % 9) as u8;
+                    for b in &blocks {
+                        if (b[0] % w as u64..b[0] % w as u64 + 5 + b[2] % 40).contains(&x)
+                            && (b[1] % h as u64..b[1] % h as u64 + 5 + b[3] % 30).contains(&y)
+                        {
+                            v = b[4] as u8;
+                        }
+                    }
+                    v
+                })
+                .collect();
+            images.push(Plane::from_vec(w, h, data).expect("plane size"));
+        }
+        let configs = [
+            Config::default(),
+            Config::paper(),
+            Config { mode: Mode::Branch, snap_radius: 1, ..Config::default() },
+            Config {
+                descriptor: DescriptorKind::Opencv,
+                n_features: 300,
+                distribution: true,
+                fill_fast_ini: 20,
+                fill_fast_min: 7,
+                snap_radius: 1,
+                ..Config::default()
+            },
+        ];
+        let run = || {
+            let colour = crate::image::load_gray(format!("{data}astronaut_256.png")).expect("colour image");
+            let mut out = vec![format!("{:?}", colour.data)];
+            for cfg in &configs {
+                let det = CpuDetector::new(cfg.clone()).expect("valid config");
+                for img in &images {
+                    let mask = Plane::from_vec(
+                        img.width,
+                        img.height,
+                        (0..img.width * img.height).map(|i| (i % 7 != 0) as u8).collect(),
+                    )
+                    .expect("mask size");
+                    for m in [None, Some(mask.view())] {
+                        let (kps, desc) = det.detect_and_compute(img.view(), m).expect("features");
+                        let bits: Vec<_> = kps
+                            .iter()
+                            .map(|k| {
+                                (
+                                    k.pt.x.to_bits(),
+                                    k.pt.y.to_bits(),
+                                    k.size.to_bits(),
+                                    k.angle.to_bits(),
+                                    k.response.to_bits(),
+                                    k.octave,
+                                    k.class_id,
+                                )
+                            })
+                            .collect();
+                        out.push(format!("{bits:?} {desc:?}"));
+                    }
+                }
+            }
+            out
+        };
+        let best = detected_tier();
+        let want = {
+            set_tier(Tier::Baseline);
+            run()
+        };
+        assert!(want.iter().skip(1).any(|f| f.len() > 1000), "the images have features");
+        for t in [Tier::Avx2, Tier::Avx512].into_iter().filter(|&t| t <= best) {
+            assert_eq!(set_tier(t), t);
+            let got = run();
+            for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+                assert!(g == w, "tier {t:?} differs from the baseline build in case {i}");
+            }
+        }
+        set_tier(best);
+    }
 
     #[test]
     fn chunk_starts_cover_the_range_and_end_at_its_end() {
