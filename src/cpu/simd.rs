@@ -47,6 +47,29 @@ macro_rules! dispatch {
 }
 pub(crate) use dispatch;
 
+/// [`dispatch!`] without the AVX-512 build, for kernels whose AVX-512 build
+/// measured slower than their AVX2 one: the AVX-512 tier runs the AVX2 build.
+macro_rules! dispatch_avx2 {
+    ($(#[$m:meta])* $vis:vis fn $name:ident<const $flag:ident>($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+        $(#[$m])*
+        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
+            #[inline(always)]
+            fn inner<const $flag: bool>($($arg: $ty),*) $(-> $ret)? $body
+            #[cfg(target_arch = "x86_64")]
+            {
+                #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+                fn avx2($($arg: $ty),*) $(-> $ret)? { inner::<true>($($arg),*) }
+                if $crate::cpu::simd::tier() >= $crate::cpu::simd::Tier::Avx2 {
+                    // SAFETY: the CPU has these features (`tier` never exceeds `detected_tier`).
+                    return unsafe { avx2($($arg),*) };
+                }
+            }
+            inner::<false>($($arg),*)
+        }
+    };
+}
+pub(crate) use dispatch_avx2;
+
 /// The builds of a [`dispatch!`] kernel, in order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Tier {

@@ -9,7 +9,7 @@
 use super::{CIRCLE, LfastParams};
 use crate::config::Mode;
 use crate::cpu::classify::EDGE;
-use crate::cpu::simd::{CHUNK, dispatch, eq_bits};
+use crate::cpu::simd::{CHUNK, dispatch, dispatch_avx2, eq_bits};
 use crate::image::Plane;
 
 /// The rows `y-7..=y+7` of an edge map and of its support map, for reads
@@ -270,7 +270,7 @@ fn bit_masks_avx2(rows: &[&[u8; CHUNK]; 16], v: u8) -> [u16; CHUNK] {
     masks
 }
 
-dispatch! {
+dispatch_avx2! {
     /// Appends to `out` the corners `[x, y]` of the window's row `y` with x in
     /// `x0..x1` (raster order), where `mrow` (if any) is non-zero. Needs
     /// `7 <= x0`, `x1 + 7 <= w` and `x1 - x0 >= 32` (panics otherwise).
