@@ -23,6 +23,12 @@ macro_rules! dispatch {
     // AVX-512 builds only, to call hand-written AVX2 code
     // (`#[target_feature(enable = "avx2")]` functions inline into both).
     ($(#[$m:meta])* $vis:vis fn $name:ident<const $flag:ident>($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+        $crate::cpu::simd::dispatch! {
+            @up_to Avx512 $(#[$m])* $vis fn $name<const $flag>($($arg: $ty),*) $(-> $ret)? $body
+        }
+    };
+    // `@up_to TIER`: the builds up to that tier run ([`dispatch_avx2!`]).
+    (@up_to $max:ident $(#[$m:meta])* $vis:vis fn $name:ident<const $flag:ident>($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
         $(#[$m])*
         $vis fn $name($($arg: $ty),*) $(-> $ret)? {
             #[inline(always)]
@@ -33,7 +39,7 @@ macro_rules! dispatch {
                 fn avx512($($arg: $ty),*) $(-> $ret)? { inner::<true>($($arg),*) }
                 #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
                 fn avx2($($arg: $ty),*) $(-> $ret)? { inner::<true>($($arg),*) }
-                match $crate::cpu::simd::tier() {
+                match $crate::cpu::simd::tier().min($crate::cpu::simd::Tier::$max) {
                     // SAFETY: the CPU has these features (`tier` never exceeds `detected_tier`).
                     $crate::cpu::simd::Tier::Avx512 => return unsafe { avx512($($arg),*) },
                     // SAFETY: as above.
@@ -51,20 +57,8 @@ pub(crate) use dispatch;
 /// measured slower than their AVX2 one: the AVX-512 tier runs the AVX2 build.
 macro_rules! dispatch_avx2 {
     ($(#[$m:meta])* $vis:vis fn $name:ident<const $flag:ident>($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
-        $(#[$m])*
-        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
-            #[inline(always)]
-            fn inner<const $flag: bool>($($arg: $ty),*) $(-> $ret)? $body
-            #[cfg(target_arch = "x86_64")]
-            {
-                #[target_feature(enable = "avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
-                fn avx2($($arg: $ty),*) $(-> $ret)? { inner::<true>($($arg),*) }
-                if $crate::cpu::simd::tier() >= $crate::cpu::simd::Tier::Avx2 {
-                    // SAFETY: the CPU has these features (`tier` never exceeds `detected_tier`).
-                    return unsafe { avx2($($arg),*) };
-                }
-            }
-            inner::<false>($($arg),*)
+        $crate::cpu::simd::dispatch! {
+            @up_to Avx2 $(#[$m])* $vis fn $name<const $flag>($($arg: $ty),*) $(-> $ret)? $body
         }
     };
 }
