@@ -212,8 +212,9 @@ const LARGE_FRAME: u64 = 1920 * 1080;
 
 /// How many frames a batch of `w x h` frames (its first frame's size) has in
 /// detection at once in the pool of `workers` threads (the workers left over
-/// take bands of the frames in hand: every stage splits into bands and levels). Up to 1920x1080, one frame per worker: each
-/// worker's bands stay in its cache (51 KITTI frames, two workers: 0.22-0.23 s
+/// take bands of the frames in hand: every stage splits into bands and
+/// levels). Up to 1920x1080, one frame per worker: each worker's bands stay
+/// in its cache (51 KITTI frames, two workers: 0.22-0.23 s
 /// against 0.23-0.24 s one at a time). Larger frames, half as many frames as
 /// workers (at least one): their planes outgrow the caches, and two frames'
 /// sets of planes in flight cost more than the bands' hand-over (four

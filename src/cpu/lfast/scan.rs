@@ -2,8 +2,9 @@
 //! [`is_corner`](super::is_corner), with fewer instructions. Per chunk of 32
 //! pixels of a row it builds all 32 circle masks at once (16 compares of 32
 //! bytes, which LLVM vectorises), then decides each edge pixel of the chunk
-//! from its mask (in paper mode all 32 at once, [`paper_bits`]). Step 4 is one byte read from a support map, computed for
-//! every pixel beforehand in one vectorised pass ([`support_map_into`]).
+//! from its mask (in paper mode all 32 at once, [`paper_bits`]). Step 4 is
+//! one byte read from a support map, computed for every pixel beforehand in
+//! one vectorised pass ([`support_map_into`]).
 //! Reads go through [`Window`], which checks once per row what every read relies on.
 
 use super::{CIRCLE, LfastParams};
