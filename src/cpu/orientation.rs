@@ -60,12 +60,12 @@ const DISC: ([[i32; 32]; 16], [[i32; 32]; 16]) = {
 
 dispatch! {
     /// [`moments`] inside the image from the disc's 31 rows (`rows[v + 15]`,
-    /// 31 bytes from column x-15): [`disc_moments_avx2`] in the AVX2 build,
+    /// 31 bytes from column x-15): [`disc_moments_avx2`] in the AVX2 and AVX-512 builds,
     /// else [`disc_moments_i32`].
     fn disc_moments<const AVX2>(rows: &[&[u8]; 31]) -> (i32, i32) {
         #[cfg(target_arch = "x86_64")]
         if AVX2 {
-            // SAFETY: AVX2 is only set in the AVX2 build
+            // SAFETY: AVX2 is only set in the builds with AVX2 (the AVX2 and AVX-512 ones)
             return unsafe { disc_moments_avx2(rows) };
         }
         disc_moments_i32(rows)
