@@ -132,11 +132,21 @@ pub fn describe_fine(smoothed: &Plane<u8>, x: u32, y: u32, sub: [i8; 2], table: 
             && ((ox + reach) >> 4) + 3 < w
             && (oy - reach) >> 4 >= 0
             && ((oy + reach) >> 4) + 1 < h;
-        if inside && std::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 checked just above; every sample's (ix, iy) lies in
-            // 0 <= ix, ix + 3 < w, 0 <= iy, iy + 1 < h (`inside`, with reach
-            // the table's largest offset), which is describe_fine_avx2's contract.
-            return unsafe { describe_fine_avx2(&smoothed.data, smoothed.width as usize, [ox, oy], t) };
+        let (data, wu, hu) = (&smoothed.data, smoothed.width as usize, smoothed.height as usize);
+        if std::is_x86_feature_detected!("avx2") && w > 0 && h > 0 && wu * hu <= data.len() {
+            // SAFETY: AVX2 checked just above, and the plane is w x h, not
+            // empty. Inside, every sample's (ix, iy) lies in 0 <= ix,
+            // ix + 3 < w, 0 <= iy, iy + 1 < h (`inside`, with reach the
+            // table's largest offset); elsewhere the reads are clamped, and
+            // o is a pixel of the plane (|o| < 2^20) plus a sub-pixel offset:
+            // describe_fine_avx2's contract either way.
+            return unsafe {
+                if inside {
+                    describe_fine_avx2::<false>(data, wu, hu, [ox, oy], t)
+                } else {
+                    describe_fine_avx2::<true>(data, wu, hu, [ox, oy], t)
+                }
+            };
         }
     }
     fine_by_samples(smoothed, [ox, oy], table)
@@ -165,14 +175,26 @@ fn fine_by_samples(smoothed: &Plane<u8>, o: [i32; 2], table: &[FinePair]) -> Des
 /// the Zen 5 measured), the bilinear weights in 16-bit multiplies (every product and sum
 /// is below 2^16), one compare and a movemask for the byte.
 ///
+/// With `CLAMP` (keypoints near the border) each of a sample's four pixels
+/// is read at its coordinates clamped to the plane, as [`sample_fine`] reads
+/// it: four byte loads per point, put together as the two rows' pixel pairs.
+///
 /// # Safety
-/// The CPU has AVX2. `data` is a `w`-wide plane, and for every offset `(u, v)`
-/// of `table` the pixel `((o[0] + u) >> 4, (o[1] + v) >> 4) = (ix, iy)` has
-/// `0 <= ix`, `ix + 3 < w`, `0 <= iy` and `(iy + 1) * w + ix + 3 < data.len()`:
-/// so both loaded 4 bytes lie in `data`.
+/// The CPU has AVX2. `data` is a `w`-wide plane of `h` rows (`w * h <=
+/// data.len()`). Without `CLAMP`, for every offset `(u, v)` of `table` the
+/// pixel `((o[0] + u) >> 4, (o[1] + v) >> 4) = (ix, iy)` has `0 <= ix`,
+/// `ix + 3 < w`, `0 <= iy` and `iy + 1 < h`: so both loaded 4 bytes lie in
+/// `data`. With `CLAMP`, `w, h >= 1` and `o` is any position whose samples
+/// do not overflow i32 (|o| < 2^30): every read is clamped into the plane.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn describe_fine_avx2(data: &[u8], w: usize, o: [i32; 2], table: &[FinePair; 256]) -> Descriptor {
+unsafe fn describe_fine_avx2<const CLAMP: bool>(
+    data: &[u8],
+    w: usize,
+    h: usize,
+    o: [i32; 2],
+    table: &[FinePair; 256],
+) -> Descriptor {
     use std::arch::x86_64::*;
     let mut d = [0u8; 32];
     // SAFETY (whole body): the table loads read 64 bytes = 8 pairs at pair
@@ -185,12 +207,65 @@ unsafe fn describe_fine_avx2(data: &[u8], w: usize, o: [i32; 2], table: &[FinePa
         // words of a pair: [x1 | y1 << 16, x2 | y2 << 16]; this permute puts the
         // four first words, then the four second words, of four pairs in a row
         let split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
+        let (wmax, hmax) = (_mm256_set1_epi32(w as i32 - 1), _mm256_set1_epi32(h as i32 - 1));
+        // the weighted sum of a row pair's pixels (bytes 0 and 1 of each lane)
+        let bilinear = |top: __m256i, bottom: __m256i, fx, fy, gx, gy| {
+            let left_right = |r: __m256i| {
+                let (l, rt) = (_mm256_and_si256(r, byte), _mm256_and_si256(_mm256_srli_epi32::<8>(r), byte));
+                _mm256_add_epi32(_mm256_mullo_epi16(l, gx), _mm256_mullo_epi16(rt, fx))
+            };
+            _mm256_add_epi32(_mm256_mullo_epi16(left_right(top), gy), _mm256_mullo_epi16(left_right(bottom), fy))
+        };
         // 256 times the bilinear value at the points (x, y) (lanes of i32, 1/16 px)
         let sample = |x: __m256i, y: __m256i| {
             let (px, py) = (_mm256_add_epi32(x, ox), _mm256_add_epi32(y, oy));
             let (ix, iy) = (_mm256_srai_epi32::<4>(px), _mm256_srai_epi32::<4>(py));
             let (fx, fy) = (_mm256_and_si256(px, fifteen), _mm256_and_si256(py, fifteen));
             let (gx, gy) = (_mm256_sub_epi32(sixteen, fx), _mm256_sub_epi32(sixteen, fy));
+            if CLAMP {
+                // pixels (x0 | x1, y0 | y1), each coordinate clamped, as
+                // (p(x0) | p(x1) << 8) per row: what the 4-byte loads give inside
+                let zero = _mm256_setzero_si256();
+                let clamp = |v: __m256i, max: __m256i| _mm256_min_epi32(_mm256_max_epi32(v, zero), max);
+                let one = _mm256_set1_epi32(1);
+                let (x0, x1) = (clamp(ix, wmax), clamp(_mm256_add_epi32(ix, one), wmax));
+                let (r0, r1) = (
+                    _mm256_mullo_epi32(clamp(iy, hmax), wv),
+                    _mm256_mullo_epi32(clamp(_mm256_add_epi32(iy, one), hmax), wv),
+                );
+                let mut at = [[0i32; 8]; 4];
+                for (a, v) in at.iter_mut().zip([
+                    _mm256_add_epi32(r0, x0),
+                    _mm256_add_epi32(r0, x1),
+                    _mm256_add_epi32(r1, x0),
+                    _mm256_add_epi32(r1, x1),
+                ]) {
+                    _mm256_storeu_si256(a.as_mut_ptr().cast(), v);
+                }
+                let px = |k: usize, l: usize| *base.add(at[k][l] as usize) as i32;
+                let pair = |k: usize, l: usize| px(k, l) | px(k + 1, l) << 8;
+                let top = _mm256_setr_epi32(
+                    pair(0, 0),
+                    pair(0, 1),
+                    pair(0, 2),
+                    pair(0, 3),
+                    pair(0, 4),
+                    pair(0, 5),
+                    pair(0, 6),
+                    pair(0, 7),
+                );
+                let bottom = _mm256_setr_epi32(
+                    pair(2, 0),
+                    pair(2, 1),
+                    pair(2, 2),
+                    pair(2, 3),
+                    pair(2, 4),
+                    pair(2, 5),
+                    pair(2, 6),
+                    pair(2, 7),
+                );
+                return bilinear(top, bottom, fx, fy, gx, gy);
+            }
             let mut at = [0i32; 8];
             _mm256_storeu_si256(at.as_mut_ptr().cast(), _mm256_add_epi32(_mm256_mullo_epi32(iy, wv), ix));
             // 4 bytes at each lane's index (the pixels ix, ix + 1 and two
@@ -217,11 +292,7 @@ unsafe fn describe_fine_avx2(data: &[u8], w: usize, o: [i32; 2], table: &[FinePa
                 four(6, w),
                 four(7, w),
             );
-            let left_right = |r: __m256i| {
-                let (l, rt) = (_mm256_and_si256(r, byte), _mm256_and_si256(_mm256_srli_epi32::<8>(r), byte));
-                _mm256_add_epi32(_mm256_mullo_epi16(l, gx), _mm256_mullo_epi16(rt, fx))
-            };
-            _mm256_add_epi32(_mm256_mullo_epi16(left_right(top), gy), _mm256_mullo_epi16(left_right(bottom), fy))
+            bilinear(top, bottom, fx, fy, gx, gy)
         };
         for (j, out) in d.iter_mut().enumerate() {
             let p = table.as_ptr().add(8 * j).cast::<__m256i>();
@@ -402,9 +473,32 @@ mod tests {
     }
 
     #[test]
+    fn fine_reads_on_planes_smaller_than_the_pattern_are_clamped() {
+        // every pixel of planes narrower or shorter than the pattern's reach,
+        // a 1x1 one included: every read clamped
+        let rp = RotatedPatterns::new(Pattern::orb(), 180);
+        for (w, h) in [(1u32, 1u32), (2, 3), (5, 1), (1, 7), (17, 9), (40, 3)] {
+            let img = hashed_image(w, h);
+            for k in [0usize, 61, 150] {
+                for y in 0..h {
+                    for x in 0..w {
+                        for sub in [[-7i8, -7], [0, 0], [7, 3], [-2, 7]] {
+                            assert_eq!(
+                                describe_fine(&img, x, y, sub, &rp.fine[k]),
+                                fine_naive(&img, x, y, sub, &rp.fine[k]),
+                                "{w}x{h}, bin {k} at ({x}, {y}), {sub:?}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn fine_vector_and_scalar_reads_agree_everywhere() {
-        // every pixel of a random image (the gathers inside, clamped reads
-        // near the borders), every 1/16 offset in turn, several bins
+        // every pixel of a random image (the unclamped loads inside, clamped
+        // ones near the borders), every 1/16 offset in turn, several bins
         let (w, h) = (67u32, 59u32);
         let img = hashed_image(w, h);
         let rp = RotatedPatterns::new(Pattern::orb(), 180);
