@@ -334,17 +334,16 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
             };
             // files that fail or are skipped before the first decoded frame pass straight on
             let mut rx_dec = rx_dec.into_iter();
-            let first = loop {
+            let (i, img) = loop {
                 match rx_dec.next() {
-                    Some((i, Stage::Decoded(img))) => break (i, Stage::Decoded(img)),
+                    Some((i, Stage::Decoded(img))) => break (i, img),
                     Some(other) => detect(other),
                     None => return,
                 }
             };
-            let Stage::Decoded(img) = &first.1 else { unreachable!("the first decoded frame") };
             // the first frame's size decides for the batch (a batch's frames mostly share one)
             let loops = frames_in_flight(img.width, img.height, threads);
-            let frames = std::iter::once(first).chain(rx_dec);
+            let frames = std::iter::once((i, Stage::Decoded(img))).chain(rx_dec);
             if loops >= threads {
                 // a frame per worker: par_bridge's workers take the next frame when done
                 return pool.install(|| frames.par_bridge().for_each(detect));

@@ -104,19 +104,13 @@ pub(super) fn run(adapter: Option<String>, sizes: &[(u32, u32)], config: Option<
 /// Which build of the row kernels runs, and why (`LFAST_SIMD`).
 fn simd_line() -> String {
     use crate::cpu::simd::{Tier, detected_tier, tier};
-    let name = |t: Tier| match t {
-        Tier::Baseline => "baseline",
-        Tier::Avx2 => "avx2",
-        Tier::Avx512 => "avx512",
-    };
-    let (run, best) = (tier(), detected_tier());
     let why = match std::env::var("LFAST_SIMD") {
         Err(std::env::VarError::NotPresent) => String::new(),
-        Ok(v) if ["baseline", "avx2", "avx512"].contains(&v.as_str()) => format!(" (LFAST_SIMD={v})"),
+        Ok(v) if Tier::from_name(&v).is_some() => format!(" (LFAST_SIMD={v})"),
         Ok(v) => format!(" (LFAST_SIMD={v} is not baseline, avx2 or avx512: ignored)"),
         Err(_) => " (LFAST_SIMD is not UTF-8: ignored)".into(),
     };
-    format!("CPU kernels: the {} build, of {} this CPU allows{why}", name(run), name(best))
+    format!("CPU kernels: the {} build, of {} this CPU allows{why}", tier().name(), detected_tier().name())
 }
 
 #[cfg(target_arch = "x86_64")]

@@ -75,6 +75,25 @@ pub enum Tier {
     Avx512 = 3,
 }
 
+impl Tier {
+    /// The tiers, in order.
+    pub const ALL: [Tier; 3] = [Tier::Baseline, Tier::Avx2, Tier::Avx512];
+
+    /// Its name, as `LFAST_SIMD` and `lfast info` spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Tier::Baseline => "baseline",
+            Tier::Avx2 => "avx2",
+            Tier::Avx512 => "avx512",
+        }
+    }
+
+    /// The tier named `s` ([`Tier::name`]), if any.
+    pub fn from_name(s: &str) -> Option<Tier> {
+        Tier::ALL.into_iter().find(|t| t.name() == s)
+    }
+}
+
 /// The tier the kernels run, as a `Tier` number; 0 until first read.
 static TIER: AtomicU8 = AtomicU8::new(0);
 
@@ -105,11 +124,7 @@ pub fn tier() -> Tier {
         2 => Tier::Avx2,
         1 => Tier::Baseline,
         _ => {
-            let cap = match std::env::var("LFAST_SIMD").as_deref() {
-                Ok("baseline") => Tier::Baseline,
-                Ok("avx2") => Tier::Avx2,
-                _ => Tier::Avx512,
-            };
+            let cap = std::env::var("LFAST_SIMD").ok().and_then(|v| Tier::from_name(&v)).unwrap_or(Tier::Avx512);
             let t = detected_tier().min(cap);
             TIER.store(t as u8, Ordering::Relaxed);
             t
