@@ -517,7 +517,10 @@ impl CpuDetector {
     /// position (`orb::describe_fine`; docs/algorithm.md), else at its pixel.
     fn describe(&self, smoothed: &Plane<u8>, c: &Corner, angle: f32, bin: u32) -> Descriptor {
         match &self.rotated {
-            Some(r) if self.cfg.snap() > 0 => orb::describe_fine(smoothed, c.x, c.y, c.sub, &r.fine[bin as usize]),
+            Some(r) if self.cfg.snap() > 0 => {
+                let b = bin as usize;
+                orb::describe_fine_within(smoothed, c.x, c.y, c.sub, &r.fine[b], r.fine_reach[b])
+            }
             Some(r) => orb::describe(smoothed, c.x, c.y, &r.tables[bin as usize]),
             None => orb::describe_continuous(smoothed, c.x, c.y, angle, self.pattern),
         }

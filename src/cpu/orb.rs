@@ -118,13 +118,26 @@ pub fn sample_fine(img: &Plane<u8>, px: i32, py: i32) -> u32 {
 /// [`Pattern::rotated_fine`]) read by [`sample_fine`]; bit i of byte j is set
 /// iff sample a < sample b of pair `8*j + i`. Mirrors shaders/orb.wgsl `fine_word`.
 pub fn describe_fine(smoothed: &Plane<u8>, x: u32, y: u32, sub: [i8; 2], table: &[FinePair]) -> Descriptor {
+    describe_fine_within(smoothed, x, y, sub, table, crate::spec::pattern::fine_reach(table))
+}
+
+/// [`describe_fine`] given `reach`, the table's largest |offset|
+/// ([`crate::spec::pattern::fine_reach`], kept per table in
+/// [`crate::spec::pattern::RotatedPatterns::fine_reach`]): the fold over the
+/// table's 1024 offsets took a fifth of a keypoint's descriptor. The vector
+/// path's unclamped reads rely on `reach`, hence crate-private.
+pub(crate) fn describe_fine_within(
+    smoothed: &Plane<u8>,
+    x: u32,
+    y: u32,
+    sub: [i8; 2],
+    table: &[FinePair],
+    reach: i32,
+) -> Descriptor {
+    debug_assert_eq!(reach, crate::spec::pattern::fine_reach(table));
     let (ox, oy) = (x as i32 * SUBPIXEL + sub[0] as i32, y as i32 * SUBPIXEL + sub[1] as i32);
     #[cfg(target_arch = "x86_64")]
     if let Some(t) = table.first_chunk::<256>() {
-        // (a plain fold: vectorised through dispatch! LLVM unrolled it into a
-        // block that valgrind's translator cannot hold, and the C test runs
-        // under memcheck)
-        let reach = t.as_flattened().iter().fold(0, |m, &v| m.max(v.unsigned_abs())) as i32;
         let (w, h) = (smoothed.width as i32, smoothed.height as i32);
         // the loads read 4 bytes from (ix, iy) and (ix, iy + 1): columns
         // up to ix + 3 (so ix + 1 is inside too), rows up to iy + 1

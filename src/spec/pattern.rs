@@ -118,6 +118,14 @@ impl Pattern {
     }
 }
 
+/// The largest |offset| of a sub-pixel table (1/16 px).
+pub fn fine_reach(table: &[FinePair]) -> i32 {
+    // (a plain fold: vectorised through `dispatch!` LLVM unrolled it into a
+    // block that valgrind's translator cannot hold, and the C test runs
+    // under memcheck)
+    table.as_flattened().iter().fold(0, |m, &v| m.max(v.unsigned_abs())) as i32
+}
+
 /// The pattern pre-rotated to every bin centre (SPEC 11, `orientation_bins`).
 #[derive(Clone, Debug)]
 pub struct RotatedPatterns {
@@ -128,6 +136,9 @@ pub struct RotatedPatterns {
     /// `fine[b]`: the same rotation in 1/16 pixel, for keypoints with a
     /// sub-pixel position ([`Pattern::rotated_fine`]).
     pub fine: Vec<Vec<FinePair>>,
+    /// `fine_reach[b]`: the largest |offset| of `fine[b]` (1/16 px), which
+    /// decides whether a keypoint's samples all lie inside its plane.
+    pub fine_reach: Vec<i32>,
 }
 
 impl RotatedPatterns {
@@ -135,8 +146,9 @@ impl RotatedPatterns {
     pub fn new(pattern: &Pattern, bins: u32) -> Self {
         let bins = AngleBins::new(bins);
         let tables = (0..bins.len() as u32).map(|b| pattern.rotated(bins.centre(b))).collect();
-        let fine = (0..bins.len() as u32).map(|b| pattern.rotated_fine(bins.centre(b))).collect();
-        Self { bins, tables, fine }
+        let fine: Vec<Vec<FinePair>> = (0..bins.len() as u32).map(|b| pattern.rotated_fine(bins.centre(b))).collect();
+        let fine_reach = fine.iter().map(|t| fine_reach(t)).collect();
+        Self { bins, tables, fine, fine_reach }
     }
 }
 
