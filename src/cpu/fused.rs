@@ -162,19 +162,42 @@ dispatch! {
 }
 
 /// One gradient row from D rows y and y+1 (clamped by the caller): S, the
-/// sector code and M8 of each column. With AVX2 the columns before the last
-/// few come from [`gradient_x86::gradient_cols`], the rest from [`gradient_tail`].
+/// sector code and M8 of each column. At the AVX2 and AVX-512 tiers the
+/// columns before the last come from [`gradient_x86::gradient_cols`] or
+/// [`gradient_x86::gradient_cols_avx512`], the last from [`gradient_tail`].
 /// A large level's two passes each take only what they use: M8 for the
 /// histograms (`S_SEC = false`), S and the sector for the NMS (`M8 =
 /// false`); the slices of the other outputs then hold only the tail's columns.
 fn gradient_row<const S_SEC: bool, const M8: bool>(r0: &[u8], r1: &[u8], s: &mut [u32], sec: &mut [u8], m8: &mut [u8]) {
-    #[allow(unused_mut)]
-    let mut done = 0;
+    // SAFETY: `tier` never exceeds `detected_tier`.
+    unsafe { gradient_row_at::<S_SEC, M8>(super::simd::tier(), r0, r1, s, sec, m8) }
+}
+
+/// [`gradient_row`] at tier `t` (the tests run each tier's kernel).
+///
+/// # Safety
+/// `t <= detected_tier()`: the CPU has the tier's features.
+#[inline(always)]
+unsafe fn gradient_row_at<const S_SEC: bool, const M8: bool>(
+    t: super::simd::Tier,
+    r0: &[u8],
+    r1: &[u8],
+    s: &mut [u32],
+    sec: &mut [u8],
+    m8: &mut [u8],
+) {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2, checked just above.
-        done = unsafe { gradient_x86::gradient_cols::<S_SEC, M8>(r0, r1, s, sec, m8) };
-    }
+    // SAFETY: the tier's features are the CPU's, by the contract.
+    let done = match t {
+        super::simd::Tier::Avx512 => unsafe { gradient_x86::gradient_cols_avx512::<S_SEC, M8>(r0, r1, s, sec, m8) },
+        super::simd::Tier::Avx2 => unsafe { gradient_x86::gradient_cols::<S_SEC, M8>(r0, r1, s, sec, m8) },
+        super::simd::Tier::Baseline => 0,
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let done = {
+        let _ = t;
+        0
+    };
     gradient_tail(r0, r1, s, sec, m8, done);
 }
 

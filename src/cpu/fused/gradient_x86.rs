@@ -6,15 +6,19 @@
 //! - vertical, `ay·32768 > 79109·ax` with 79109 = 2·32768 + 13573, is
 //!   `−32768·(2ax − ay) − 13573·ax > 0`, where `2ax − ay` fits i16.
 //!
-//! M8 = min(isqrt(S) >> 1, 255) by f32 as in [`super::sqrt_floor`]. Checked
-//! against the scalar kernel in `super::tests::gradient_row_vector_equals_scalar`.
+//! M8 = min(isqrt(S) >> 1, 255) by f32 as in [`super::sqrt_floor`].
+//! [`gradient_cols_avx512`] does the same 32 pixels per step, the sector
+//! tests' results as mask registers. Both end with a step that overlaps the
+//! one before (recomputing a few columns) so that only the last column is
+//! left to the scalar tail. Checked against the scalar kernel at every tier
+//! in `super::tests::gradient_row_vector_equals_scalar`.
 
 use std::arch::x86_64::*;
 
 /// Columns `0..n` of a gradient row (S and the sector when `S_SEC`, M8 when
-/// `M8`; the other slices are left as they are), `n` the largest multiple of 16 with
-/// `n + 1 <= w` (0 when `w < 17`); returns `n`. The slices have length `w`
-/// at least (`r0`'s length is `w`).
+/// `M8`; the other slices are left as they are), `n = w - 1` (0 when `w <
+/// 17`): 16 columns a step, the last step at `w - 17`; returns `n`. The
+/// slices have length `w` at least (`r0`'s length is `w`).
 ///
 /// # Safety
 /// The CPU has AVX2.
@@ -27,7 +31,7 @@ pub(super) unsafe fn gradient_cols<const S_SEC: bool, const M8: bool>(
     m8: &mut [u8],
 ) -> usize {
     let w = r0.len();
-    let n = if w >= 17 { (w - 1) / 16 * 16 } else { 0 };
+    let n = if w >= 17 { w - 1 } else { 0 };
     assert!(r1.len() >= w && s.len() >= w && sec.len() >= w && m8.len() >= w, "gradient_cols: short rows");
     // (13573, -32768) and (-32768, -13573) as i16 pairs, low half first
     let k_h = _mm256_set1_epi32(((0x8000u32 << 16) | 13573) as i32);
@@ -37,7 +41,9 @@ pub(super) unsafe fn gradient_cols<const S_SEC: bool, const M8: bool>(
     let two = _mm256_set1_epi16(2);
     let mut x = 0;
     while x < n {
-        // SAFETY: x + 16 < x + 17 <= n + 1 <= w, so every 16-byte load (at x
+        // the last step overlaps the one before: it ends at column n - 1
+        x = x.min(n - 16);
+        // SAFETY: x + 17 <= n + 1 = w, so every 16-byte load (at x
         // and x + 1) and every store (16 u32 at s[x], 16 bytes at sec[x], m8[x])
         // lies inside slices of length >= w, asserted above.
         unsafe {
@@ -98,4 +104,98 @@ unsafe fn store16(out: &mut [u8], at: usize, v: __m256i) {
         let v = _mm256_permute4x64_epi64::<0b00_00_10_00>(v);
         _mm_storeu_si128(out.as_mut_ptr().add(at).cast::<__m128i>(), _mm256_castsi256_si128(v));
     }
+}
+
+/// [`gradient_cols`] with AVX-512 (F, BW), 32 columns a step, the last step
+/// at `w - 33`; rows narrower than 33 go to [`gradient_cols`]. Returns `w - 1`
+/// (0 when `w < 17`).
+///
+/// # Safety
+/// The CPU has the AVX-512 tier ([`crate::cpu::simd::Tier::Avx512`]).
+#[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl,avx2,fma,popcnt,lzcnt,bmi1,bmi2")]
+pub(super) unsafe fn gradient_cols_avx512<const S_SEC: bool, const M8: bool>(
+    r0: &[u8],
+    r1: &[u8],
+    s: &mut [u32],
+    sec: &mut [u8],
+    m8: &mut [u8],
+) -> usize {
+    let w = r0.len();
+    if w < 33 {
+        // SAFETY: AVX2, by the contract.
+        return unsafe { gradient_cols::<S_SEC, M8>(r0, r1, s, sec, m8) };
+    }
+    let n = w - 1;
+    assert!(r1.len() >= w && s.len() >= w && sec.len() >= w && m8.len() >= w, "gradient_cols_avx512: short rows");
+    let k_h = _mm512_set1_epi32(((0x8000u32 << 16) | 13573) as i32);
+    let k_v = _mm512_set1_epi32((((-13573i32 as u32) & 0xffff) << 16 | 0x8000) as i32);
+    let zero = _mm512_setzero_si512();
+    // unpacklo/hi interleave within 128-bit lanes: lane k of `lo` holds pixels
+    // 8k..8k+3, of `hi` 8k+4..8k+7; these pick pixels 0-15 and 16-31 (an index
+    // of 16 and up reads `hi`)
+    let order = |first: i32| {
+        let mut idx = [0i32; 16];
+        for (p, v) in idx.iter_mut().enumerate() {
+            let p = first + p as i32;
+            let (k, j) = (p / 8, p % 8);
+            *v = if j < 4 { 4 * k + j } else { 16 + 4 * k + j - 4 };
+        }
+        // SAFETY: 64 bytes read from a [i32; 16].
+        unsafe { _mm512_loadu_si512(idx.as_ptr().cast()) }
+    };
+    let (first, second) = (order(0), order(16));
+    let mut x = 0;
+    while x < n {
+        x = x.min(n - 32);
+        // SAFETY: x + 33 <= n + 1 = w, so every 32-byte load (at x and x + 1)
+        // and every store (32 u32 at s[x], 32 bytes at sec[x], m8[x]) lies
+        // inside slices of length >= w, asserted above.
+        unsafe {
+            let ld =
+                |r: &[u8], at: usize| _mm512_cvtepu8_epi16(_mm256_loadu_si256(r.as_ptr().add(at).cast::<__m256i>()));
+            let (a, b, c, e) = (ld(r0, x), ld(r0, x + 1), ld(r1, x), ld(r1, x + 1));
+            let dx = _mm512_sub_epi16(_mm512_sub_epi16(_mm512_add_epi16(b, e), a), c);
+            let dy = _mm512_sub_epi16(_mm512_sub_epi16(_mm512_add_epi16(c, e), a), b);
+            // sums of pairs' products in pixel order: pixels 0-15 and 16-31
+            let madd = |p: __m512i, q: __m512i, k: Option<__m512i>| {
+                let (lo, hi) = (_mm512_unpacklo_epi16(p, q), _mm512_unpackhi_epi16(p, q));
+                let (lo, hi) = match k {
+                    Some(k) => (_mm512_madd_epi16(lo, k), _mm512_madd_epi16(hi, k)),
+                    None => (_mm512_madd_epi16(lo, lo), _mm512_madd_epi16(hi, hi)),
+                };
+                (_mm512_permutex2var_epi32(lo, first, hi), _mm512_permutex2var_epi32(lo, second, hi))
+            };
+            let (s0, s1) = madd(dx, dy, None);
+            if M8 {
+                // as gradient_cols; vpmovusdb saturates at 255
+                let q = |v: __m512i| _mm512_srli_epi32::<1>(_mm512_cvttps_epi32(_mm512_sqrt_ps(_mm512_cvtepi32_ps(v))));
+                let out = m8.as_mut_ptr().add(x).cast::<__m128i>();
+                _mm_storeu_si128(out, _mm512_cvtusepi32_epi8(q(s0)));
+                _mm_storeu_si128(out.add(1), _mm512_cvtusepi32_epi8(q(s1)));
+            }
+            if !S_SEC {
+                x += 32;
+                continue;
+            }
+            _mm512_storeu_si512(s.as_mut_ptr().add(x).cast(), s0);
+            _mm512_storeu_si512(s.as_mut_ptr().add(x + 16).cast(), s1);
+            let (ax, ay) = (_mm512_abs_epi16(dx), _mm512_abs_epi16(dy));
+            // a test's 32 pixels as a mask, pixel p at bit p
+            let test = |p: __m512i, q: __m512i, k: __m512i| {
+                let (t0, t1) = madd(p, q, Some(k));
+                let (m0, m1) = (_mm512_cmpgt_epi32_mask(t0, zero), _mm512_cmpgt_epi32_mask(t1, zero));
+                (m0 as u32) | (m1 as u32) << 16
+            };
+            let horizontal = test(ax, ay, k_h);
+            let vertical = test(_mm512_sub_epi16(_mm512_add_epi16(ax, ax), ay), ax, k_v);
+            let opposite = _mm512_cmpgt_epi16_mask(dx, zero) ^ _mm512_cmpgt_epi16_mask(dy, zero);
+            // sector code: vertical 1, horizontal 0, else 2 + (signs differ)
+            let code = _mm256_mask_blend_epi8(opposite, _mm256_set1_epi8(2), _mm256_set1_epi8(3));
+            let code = _mm256_mask_blend_epi8(horizontal, code, _mm256_setzero_si256());
+            let code = _mm256_mask_blend_epi8(vertical, code, _mm256_set1_epi8(1));
+            _mm256_storeu_si256(sec.as_mut_ptr().add(x).cast::<__m256i>(), code);
+        }
+        x += 32;
+    }
+    n
 }

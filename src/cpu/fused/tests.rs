@@ -36,6 +36,20 @@ fn median_rows_equal_the_scalar_definition() {
     }
 }
 
+/// [`gradient_row`] at `tier`, one the CPU has.
+fn row_at<const S_SEC: bool, const M8: bool>(
+    tier: crate::cpu::simd::Tier,
+    r0: &[u8],
+    r1: &[u8],
+    s: &mut [u32],
+    sec: &mut [u8],
+    m8: &mut [u8],
+) {
+    assert!(tier <= crate::cpu::simd::detected_tier());
+    // SAFETY: the CPU has the tier, asserted above.
+    unsafe { gradient_row_at::<S_SEC, M8>(tier, r0, r1, s, sec, m8) }
+}
+
 #[test]
 fn gradient_row_vector_equals_scalar() {
     // rows with every extreme (0 and 255 next to each other) and random bytes,
@@ -49,20 +63,23 @@ fn gradient_row_vector_equals_scalar() {
             _ => (seed >> 40) as u8,
         }
     };
-    for w in (1..=70).chain([255, 256, 257, 1241]) {
-        for _ in 0..20 {
-            let (r0, r1): (Vec<u8>, Vec<u8>) = (0..w).map(|_| (byte(), byte())).unzip();
-            let (mut s, mut sec, mut m8) = (vec![0; w], vec![0; w], vec![0; w]);
-            let (mut s2, mut sec2, mut m82) = (vec![1; w], vec![9; w], vec![7; w]);
-            gradient_row::<true, true>(&r0, &r1, &mut s, &mut sec, &mut m8);
-            gradient_tail(&r0, &r1, &mut s2, &mut sec2, &mut m82, 0);
-            assert_eq!((&s, &sec, &m8), (&s2, &sec2, &m82), "w {w}");
-            // each pass of a large level: its outputs alike
-            let (mut s3, mut sec3, mut m83) = (vec![5; w], vec![5; w], vec![5; w]);
-            gradient_row::<false, true>(&r0, &r1, &mut s3, &mut sec3, &mut m83);
-            assert_eq!(m83, m8, "w {w}, M8 only");
-            gradient_row::<true, false>(&r0, &r1, &mut s3, &mut sec3, &mut m83);
-            assert_eq!((&s3, &sec3), (&s, &sec), "w {w}, S and sector only");
+    let best = crate::cpu::simd::detected_tier();
+    for tier in crate::cpu::simd::Tier::ALL.into_iter().filter(|&t| t <= best) {
+        for w in (1..=70).chain([95, 96, 97, 255, 256, 257, 1241]) {
+            for _ in 0..20 {
+                let (r0, r1): (Vec<u8>, Vec<u8>) = (0..w).map(|_| (byte(), byte())).unzip();
+                let (mut s, mut sec, mut m8) = (vec![0; w], vec![0; w], vec![0; w]);
+                let (mut s2, mut sec2, mut m82) = (vec![1; w], vec![9; w], vec![7; w]);
+                row_at::<true, true>(tier, &r0, &r1, &mut s, &mut sec, &mut m8);
+                gradient_tail(&r0, &r1, &mut s2, &mut sec2, &mut m82, 0);
+                assert_eq!((&s, &sec, &m8), (&s2, &sec2, &m82), "w {w}, tier {tier:?}");
+                // each pass of a large level: its outputs alike
+                let (mut s3, mut sec3, mut m83) = (vec![5; w], vec![5; w], vec![5; w]);
+                row_at::<false, true>(tier, &r0, &r1, &mut s3, &mut sec3, &mut m83);
+                assert_eq!(m83, m8, "w {w}, M8 only");
+                row_at::<true, false>(tier, &r0, &r1, &mut s3, &mut sec3, &mut m83);
+                assert_eq!((&s3, &sec3), (&s, &sec), "w {w}, S and sector only");
+            }
         }
     }
 }
@@ -75,20 +92,23 @@ fn gradient_row_vector_equals_scalar_for_every_gradient() {
     let w = 2 * 256 + 1;
     let (mut s, mut sec, mut m8) = (vec![0; w], vec![0; w], vec![0; w]);
     let (mut s2, mut sec2, mut m82) = (vec![0; w], vec![0; w], vec![0; w]);
-    for a in [0u8, 255] {
-        for b in 0..=255u8 {
-            for c in 0..=255u8 {
-                let r0: Vec<u8> = (0..w).map(|x| if x % 2 == 0 { a } else { b }).collect();
-                let r1: Vec<u8> = (0..w).map(|x| if x % 2 == 0 { c } else { (x / 2) as u8 }).collect();
-                gradient_row::<true, true>(&r0, &r1, &mut s, &mut sec, &mut m8);
-                gradient_tail(&r0, &r1, &mut s2, &mut sec2, &mut m82, 0);
-                assert!(s == s2 && sec == sec2 && m8 == m82, "a {a} b {b} c {c}");
-                s2.fill(u32::MAX);
-                sec2.fill(9);
-                m82.fill(7);
-                gradient_row::<false, true>(&r0, &r1, &mut s2, &mut sec2, &mut m82);
-                gradient_row::<true, false>(&r0, &r1, &mut s2, &mut sec2, &mut m82);
-                assert!(s == s2 && sec == sec2 && m8 == m82, "passes: a {a} b {b} c {c}");
+    let best = crate::cpu::simd::detected_tier();
+    for tier in crate::cpu::simd::Tier::ALL.into_iter().filter(|&t| t <= best) {
+        for a in [0u8, 255] {
+            for b in 0..=255u8 {
+                for c in 0..=255u8 {
+                    let r0: Vec<u8> = (0..w).map(|x| if x % 2 == 0 { a } else { b }).collect();
+                    let r1: Vec<u8> = (0..w).map(|x| if x % 2 == 0 { c } else { (x / 2) as u8 }).collect();
+                    row_at::<true, true>(tier, &r0, &r1, &mut s, &mut sec, &mut m8);
+                    gradient_tail(&r0, &r1, &mut s2, &mut sec2, &mut m82, 0);
+                    assert!(s == s2 && sec == sec2 && m8 == m82, "a {a} b {b} c {c}, tier {tier:?}");
+                    s2.fill(u32::MAX);
+                    sec2.fill(9);
+                    m82.fill(7);
+                    row_at::<false, true>(tier, &r0, &r1, &mut s2, &mut sec2, &mut m82);
+                    row_at::<true, false>(tier, &r0, &r1, &mut s2, &mut sec2, &mut m82);
+                    assert!(s == s2 && sec == sec2 && m8 == m82, "passes: a {a} b {b} c {c}, tier {tier:?}");
+                }
             }
         }
     }
