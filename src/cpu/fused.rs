@@ -134,8 +134,9 @@ where
         }
         let o: &mut [u8; CHUNK] = (&mut out[x0..x0 + CHUNK]).try_into().expect("CHUNK bytes");
         if flags.iter().fold(false, |a, &f| a | f) {
-            let [ul, ur, dl, dr] =
-                [(up, x0 - 1), (up, x0 + 1), (down, x0 - 1), (down, x0 + 1)].map(|(r, x)| chunk(r, x));
+            // (four calls, not an array's `map`: that one was called out of
+            // line, with a vzeroupper and spills, once per chunk)
+            let (ul, ur, dl, dr) = (chunk(up, x0 - 1), chunk(up, x0 + 1), chunk(down, x0 - 1), chunk(down, x0 + 1));
             for t in 0..CHUNK {
                 let m = median::median9([ul[t], u[t], ur[t], l[t], c[t], r[t], dl[t], d[t], dr[t]]);
                 o[t] = if flags[t] { m } else { c[t] };
@@ -317,25 +318,51 @@ dispatch! {
     fn rules_row(cu: &[u8], c: &[u8], cd: &[u8], out: &mut [u8]) {
         let w = out.len();
         let (cu, c, cd) = (&cu[..w + 2], &c[..w + 2], &cd[..w + 2]);
-        for x in 0..w {
-            let n = [cu[x], cu[x + 1], cu[x + 2], c[x], c[x + 2], cd[x], cd[x + 1], cd[x + 2]];
-            let mut ws = false;
-            let mut ww = false;
-            for v in n {
-                ws |= v == WEAK_STRONG;
-                ww |= v == WEAK_WEAK;
+        if w < CHUNK {
+            for x in 0..w {
+                let n = [cu[x], cu[x + 1], cu[x + 2], c[x], c[x + 2], cd[x], cd[x + 1], cd[x + 2]];
+                out[x] = rule_of(n, c[x + 1]);
             }
-            let v = c[x + 1];
-            out[x] = if v == WEAK_STRONG {
-                if ws { EDGE } else { WEAK }
-            } else if v == WEAK_WEAK {
-                if ww { NONE } else { WEAK }
-            } else if v == STRONG {
-                EDGE
-            } else {
-                v
-            };
+            return;
         }
+        // CHUNK columns a step, the last step overlapping the one before (no
+        // scalar remainder: up to 63 columns a row at the AVX-512 tier)
+        for x0 in chunk_starts(0, w) {
+            let o: &mut [u8; CHUNK] = (&mut out[x0..x0 + CHUNK]).try_into().expect("CHUNK bytes");
+            let v = chunk(c, x0 + 1);
+            // most chunks are all NONE, which stays NONE
+            if v.iter().fold(0, |a, &b| a | b) == NONE {
+                *o = [NONE; CHUNK];
+                continue;
+            }
+            // (calls, not an array's `map`, which is not inlined: see median_interior)
+            let (ul, uc, ur) = (chunk(cu, x0), chunk(cu, x0 + 1), chunk(cu, x0 + 2));
+            let (l, r) = (chunk(c, x0), chunk(c, x0 + 2));
+            let (dl, dc, dr) = (chunk(cd, x0), chunk(cd, x0 + 1), chunk(cd, x0 + 2));
+            for t in 0..CHUNK {
+                o[t] = rule_of([ul[t], uc[t], ur[t], l[t], r[t], dl[t], dc[t], dr[t]], v[t]);
+            }
+        }
+    }
+}
+
+/// Rules 1 and 2 for one pixel of class `v` whose 8 neighbours' classes are `n`.
+#[inline(always)]
+fn rule_of(n: [u8; 8], v: u8) -> u8 {
+    let mut ws = false;
+    let mut ww = false;
+    for c in n {
+        ws |= c == WEAK_STRONG;
+        ww |= c == WEAK_WEAK;
+    }
+    if v == WEAK_STRONG {
+        if ws { EDGE } else { WEAK }
+    } else if v == WEAK_WEAK {
+        if ww { NONE } else { WEAK }
+    } else if v == STRONG {
+        EDGE
+    } else {
+        v
     }
 }
 
