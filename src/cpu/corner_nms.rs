@@ -166,11 +166,17 @@ impl Square<'_> {
                 }
             }
         }
-        let row_beats = |j: usize| self.row_beats(&t, kp, side, chunks, j);
-        if row_beats(r) {
+        if self.row_beats(&t, kp, side, chunks, r) {
             return true;
         }
-        (1..=r).any(|d| row_beats(r - d) || row_beats(r + d))
+        // a loop, not `(1..=r).any(..)`: that closure was called out of line,
+        // built without the kernel's target features
+        for d in 1..=r {
+            if self.row_beats(&t, kp, side, chunks, r - d) || self.row_beats(&t, kp, side, chunks, r + d) {
+                return true;
+            }
+        }
+        false
     }
 
     /// Whether row `j` of the square beats `kp`, with the thresholds `t` of [`Self::beaten`].
