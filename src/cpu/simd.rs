@@ -148,7 +148,13 @@ pub(crate) const CHUNK: usize = 32;
 /// `r[t0..t0 + CHUNK]` as an array, so that loops over it have a constant trip count and vectorise.
 #[inline(always)]
 pub(crate) fn chunk<T>(r: &[T], t0: usize) -> &[T; CHUNK] {
-    r[t0..t0 + CHUNK].try_into().expect("CHUNK elements")
+    chunk_n::<CHUNK, T>(r, t0)
+}
+
+/// [`chunk`] of `N` elements (kernels whose AVX-512 build takes 64 pixels a step).
+#[inline(always)]
+pub(crate) fn chunk_n<const N: usize, T>(r: &[T], t0: usize) -> &[T; N] {
+    r[t0..t0 + N].try_into().expect("N elements")
 }
 
 /// Starts of the CHUNK-wide windows that cover `x0..x1` (`x1 - x0 >= CHUNK`):
@@ -157,24 +163,30 @@ pub(crate) fn chunk<T>(r: &[T], t0: usize) -> &[T; CHUNK] {
 /// same values there).
 #[inline]
 pub(crate) fn chunk_starts(x0: usize, x1: usize) -> ChunkStarts {
-    debug_assert!(x1 >= x0 + CHUNK, "chunk_starts: {x0}..{x1} is narrower than a chunk");
-    ChunkStarts { next: Some(x0), last: x1 - CHUNK }
+    chunk_starts_n::<CHUNK>(x0, x1)
+}
+
+/// [`chunk_starts`] for windows `N` wide (`x1 - x0 >= N`).
+#[inline]
+pub(crate) fn chunk_starts_n<const N: usize>(x0: usize, x1: usize) -> ChunkStarts<N> {
+    debug_assert!(x1 >= x0 + N, "chunk_starts: {x0}..{x1} is narrower than a chunk");
+    ChunkStarts { next: Some(x0), last: x1 - N }
 }
 
 /// The iterator of [`chunk_starts`] (one compare per step, cheaper in the row
 /// kernels than a chained `step_by`).
-pub(crate) struct ChunkStarts {
+pub(crate) struct ChunkStarts<const N: usize = CHUNK> {
     next: Option<usize>,
     last: usize,
 }
 
-impl Iterator for ChunkStarts {
+impl<const N: usize> Iterator for ChunkStarts<N> {
     type Item = usize;
 
     #[inline(always)]
     fn next(&mut self) -> Option<usize> {
         let t = self.next?.min(self.last);
-        self.next = (t < self.last).then_some(t + CHUNK);
+        self.next = (t < self.last).then_some(t + N);
         Some(t)
     }
 }
