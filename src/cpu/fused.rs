@@ -176,9 +176,10 @@ dispatch! {
     }
 }
 
-/// Whether a median row of `w` pixels takes 64 pixels a step: at the
-/// AVX-512 tier (a vector of 64 bytes; 1.5x faster than 32 a step there), on
-/// rows of at least 66 pixels. Either width computes the same bytes.
+/// Whether a median or rules row of `w` pixels takes 64 pixels a step: at
+/// the AVX-512 tier (a vector of 64 bytes; the median 1.5x faster than 32 a
+/// step there), on rows of at least 66 pixels. Either width computes the
+/// same bytes.
 #[inline(always)]
 fn wide_chunks(w: usize) -> bool {
     w >= 64 + 2 && super::simd::tier() == super::simd::Tier::Avx512
@@ -338,32 +339,44 @@ dispatch! {
     /// borders need no special case) into `out` (`w`). STRONG is written as
     /// EDGE, which it becomes in hysteresis anyway (see `hysteresis::flood_seams`).
     fn rules_row(cu: &[u8], c: &[u8], cd: &[u8], out: &mut [u8]) {
-        let w = out.len();
-        let (cu, c, cd) = (&cu[..w + 2], &c[..w + 2], &cd[..w + 2]);
-        if w < CHUNK {
-            for x in 0..w {
-                let n = [cu[x], cu[x + 1], cu[x + 2], c[x], c[x + 2], cd[x], cd[x + 1], cd[x + 2]];
-                out[x] = rule_of(n, c[x + 1]);
-            }
-            return;
+        if wide_chunks(out.len()) {
+            rules_in::<64>(cu, c, cd, out)
+        } else {
+            rules_in::<CHUNK>(cu, c, cd, out)
         }
-        // CHUNK columns a step, the last step overlapping the one before (no
-        // scalar remainder: up to 63 columns a row at the AVX-512 tier)
-        for x0 in chunk_starts(0, w) {
-            let o: &mut [u8; CHUNK] = (&mut out[x0..x0 + CHUNK]).try_into().expect("CHUNK bytes");
-            let v = chunk(c, x0 + 1);
-            // most chunks are all NONE, which stays NONE
-            if v.iter().fold(0, |a, &b| a | b) == NONE {
-                *o = [NONE; CHUNK];
-                continue;
-            }
-            // (calls, not an array's `map`, which is not inlined: see median_interior)
-            let (ul, uc, ur) = (chunk(cu, x0), chunk(cu, x0 + 1), chunk(cu, x0 + 2));
-            let (l, r) = (chunk(c, x0), chunk(c, x0 + 2));
-            let (dl, dc, dr) = (chunk(cd, x0), chunk(cd, x0 + 1), chunk(cd, x0 + 2));
-            for t in 0..CHUNK {
-                o[t] = rule_of([ul[t], uc[t], ur[t], l[t], r[t], dl[t], dc[t], dr[t]], v[t]);
-            }
+    }
+}
+
+/// [`rules_row`]'s loop, `C` columns a step, the last step overlapping the
+/// one before (no scalar remainder, which had been up to 63 columns a row).
+#[inline(always)]
+fn rules_in<const C: usize>(cu: &[u8], c: &[u8], cd: &[u8], out: &mut [u8]) {
+    let w = out.len();
+    let (cu, c, cd) = (&cu[..w + 2], &c[..w + 2], &cd[..w + 2]);
+    if w < C {
+        for x in 0..w {
+            let n = [cu[x], cu[x + 1], cu[x + 2], c[x], c[x + 2], cd[x], cd[x + 1], cd[x + 2]];
+            out[x] = rule_of(n, c[x + 1]);
+        }
+        return;
+    }
+    for x0 in chunk_starts_n::<C>(0, w) {
+        let o: &mut [u8; C] = (&mut out[x0..x0 + C]).try_into().expect("C bytes");
+        let v = chunk_n::<C, _>(c, x0 + 1);
+        // most chunks are all NONE, which stays NONE
+        if v.iter().fold(0, |a, &b| a | b) == NONE {
+            *o = [NONE; C];
+            continue;
+        }
+        // (calls, not an array's `map`, which is not inlined: see median_interior)
+        fn at<const C: usize>(row: &[u8], x: usize) -> &[u8; C] {
+            chunk_n::<C, u8>(row, x)
+        }
+        let (ul, uc, ur) = (at::<C>(cu, x0), at::<C>(cu, x0 + 1), at::<C>(cu, x0 + 2));
+        let (l, r) = (at::<C>(c, x0), at::<C>(c, x0 + 2));
+        let (dl, dc, dr) = (at::<C>(cd, x0), at::<C>(cd, x0 + 1), at::<C>(cd, x0 + 2));
+        for t in 0..C {
+            o[t] = rule_of([ul[t], uc[t], ur[t], l[t], r[t], dl[t], dc[t], dr[t]], v[t]);
         }
     }
 }
