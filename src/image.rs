@@ -164,6 +164,23 @@ impl<'a> GrayView<'a> {
         }
     }
 
+    /// [`copy_into`](Self::copy_into) in bands of rows on the current rayon
+    /// pool: a frame's first step, which the other threads would otherwise wait out.
+    pub fn par_copy_into(&self, out: &mut Plane<u8>) {
+        use rayon::prelude::*;
+        out.reshape(self.width, self.height);
+        let w = self.width as usize;
+        const BAND: usize = 64;
+        if w == 0 {
+            return;
+        }
+        out.data.par_chunks_mut(w * BAND).enumerate().for_each(|(b, rows)| {
+            for (k, row) in rows.chunks_exact_mut(w).enumerate() {
+                row.copy_from_slice(self.row((b * BAND + k) as u32));
+            }
+        });
+    }
+
     /// A dense copy.
     pub fn to_plane(&self) -> Plane<u8> {
         if self.stride == self.width as usize {

@@ -323,21 +323,46 @@ impl CpuDetector {
         // each keypoint reads ~31 rows of its level around it, which on a large
         // frame come from memory rather than cache unless the previous keypoint
         // read the same rows (same output: each keypoint is computed alone).
-        let mut order: Vec<u32> = (0..corners.len() as u32).collect();
-        order.sort_unstable_by_key(|&i| {
-            let c = &corners[i as usize];
-            (c.level, c.y, c.x)
-        });
-        let mut done: Vec<(u32, KeyPoint, Descriptor)> = order
+        // (by level and row, a counting sort: a comparison sort of the
+        // indices was serial work between the parallel stages; the order
+        // within a row does not matter)
+        let mut row_start = vec![0u32; levels.len() + 1];
+        for (l, p) in levels.iter().enumerate() {
+            row_start[l + 1] = row_start[l] + p.height;
+        }
+        let row_of = |c: &Corner| {
+            let l = c.level as usize;
+            (row_start[l] + c.y.min(row_start[l + 1] - row_start[l])) as usize
+        };
+        let mut count = vec![0u32; row_start[levels.len()] as usize + 2];
+        for c in corners {
+            count[row_of(c) + 1] += 1;
+        }
+        for r in 1..count.len() {
+            count[r] += count[r - 1];
+        }
+        let mut order = vec![0u32; corners.len()];
+        for (i, c) in corners.iter().enumerate() {
+            let slot = &mut count[row_of(c)];
+            order[*slot as usize] = i as u32;
+            *slot += 1;
+        }
+        let done: Vec<(KeyPoint, Descriptor)> = order
             .par_iter()
             .map(|&i| {
                 let c = &corners[i as usize];
                 let (kp, bin) = self.keypoint(levels, c, centre);
-                (i, kp, self.describe(&smoothed[c.level as usize], c, kp.angle, bin))
+                (kp, self.describe(&smoothed[c.level as usize], c, kp.angle, bin))
             })
             .collect();
-        done.sort_unstable_by_key(|d| d.0);
-        done.into_iter().map(|(_, kp, d)| (kp, d)).unzip()
+        // back to SPEC 9's order: `order` is a permutation, so each result
+        // is fetched from its place (a sort of these 60-byte records was
+        // serial work after the parallel description)
+        let mut at = vec![0u32; order.len()];
+        for (k, &i) in order.iter().enumerate() {
+            at[i as usize] = k as u32;
+        }
+        at.iter().map(|&k| done[k as usize]).unzip()
     }
 
     /// Descriptors of `kps` on `base` as OpenCV 5's ORB `compute()` makes them
@@ -403,7 +428,7 @@ impl CpuDetector {
         let top = at.iter().map(|c| c.level + 1).max().unwrap_or(1) as usize;
         Ok(self.with_workspace(|ws| {
             ws.levels.resize_with(1, Default::default);
-            image.copy_into(&mut ws.levels[0]);
+            image.par_copy_into(&mut ws.levels[0]);
             pyramid::build_levels(&sizes[..top], &mut ws.levels);
             let levels = &ws.levels;
             let smoothed = smooth_used_levels(levels, at.iter().map(|c| c.level), &mut ws.smooth);
@@ -437,7 +462,7 @@ impl CpuDetector {
         ws.levels.resize_with(n, Default::default);
         ws.levels.truncate(n);
         ws.edges.resize_with(n, Default::default);
-        image.copy_into(&mut ws.levels[0]);
+        image.par_copy_into(&mut ws.levels[0]);
         let masks: Option<Vec<Plane<u8>>> = mask.map(|m| {
             let m = m.to_plane();
             sizes.par_iter().map(|&(w, h)| level_mask(&m, w, h, self.mask_radius)).collect()
