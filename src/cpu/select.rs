@@ -29,6 +29,59 @@ pub fn order(a: &Corner, b: &Corner) -> Ordering {
 
 pub use crate::spec::quotas::level_quotas;
 
+/// [`order`] as one integer: response (as `total_cmp` orders it,
+/// descending), level, y, x packed in a u128, ascending.
+#[inline]
+fn order_key(c: &Corner) -> u128 {
+    let b = c.response.to_bits() as i32;
+    // total_cmp's order as a signed integer, then unsigned and descending
+    let t = b ^ ((((b >> 31) as u32) >> 1) as i32);
+    let r = !((t as u32) ^ 0x8000_0000);
+    (r as u128) << 96 | (c.level as u128) << 64 | (c.y as u128) << 32 | c.x as u128
+}
+
+/// Sorts `v` as `v.sort_by(order)` does (stably), by [`order_key`], the
+/// index breaking ties: a key compare is one instruction pair where `order`
+/// chains a float compare and three more.
+pub fn sort_by_order(v: &mut [Corner]) {
+    if v.len() < 2 {
+        return;
+    }
+    let mut keyed: Vec<(u128, u32)> = v.iter().enumerate().map(|(i, c)| (order_key(c), i as u32)).collect();
+    keyed.sort_unstable();
+    let sorted: Vec<Corner> = keyed.iter().map(|&(_, i)| v[i as usize]).collect();
+    v.copy_from_slice(&sorted);
+}
+
+/// The lists concatenated and sorted as `sort_by(order)` would sort them
+/// (stably): each list sorted on its own, in parallel, then merged, the
+/// earlier list first where keys tie. The sort of all corners had been
+/// serial work between the parallel detection and description.
+pub fn merge_in_order(mut lists: Vec<Vec<Corner>>) -> Vec<Corner> {
+    use rayon::prelude::*;
+    let keys: Vec<Vec<u128>> = lists
+        .par_iter_mut()
+        .map(|v| {
+            sort_by_order(v);
+            v.iter().map(order_key).collect()
+        })
+        .collect();
+    let total = lists.iter().map(Vec::len).sum();
+    let mut heads = vec![0usize; lists.len()];
+    let mut out = Vec::with_capacity(total);
+    for _ in 0..total {
+        let mut best = usize::MAX;
+        for (l, k) in keys.iter().enumerate() {
+            if heads[l] < k.len() && (best == usize::MAX || k[heads[l]] < keys[best][heads[best]]) {
+                best = l;
+            }
+        }
+        out.push(lists[best][heads[best]]);
+        heads[best] += 1;
+    }
+    out
+}
+
 /// ORB-SLAM's `DistributeOctTree` on one level: split the region into nodes
 /// (initially `round(W/H)` vertical strips), split every node holding more
 /// than one corner into four until there are at least `n` nodes or nothing
@@ -124,9 +177,7 @@ pub fn distribute_quadtree(corners: &[Corner], width: u32, height: u32, n: usize
 /// any slots still left go to the best remaining fill corners of any level.
 pub fn select(per_level: Vec<Vec<Corner>>, sizes: &[(u32, u32)], n: u32, distribution: bool) -> Vec<Corner> {
     if n == 0 {
-        let mut all: Vec<Corner> = per_level.into_iter().flatten().collect();
-        all.sort_by(order);
-        return all;
+        return merge_in_order(per_level);
     }
     let quotas = level_quotas(n, sizes);
     let (mut taken, mut rest) = (Vec::new(), Vec::new());
@@ -158,7 +209,7 @@ pub fn select(per_level: Vec<Vec<Corner>>, sizes: &[(u32, u32)], n: u32, distrib
         taken.extend(chosen);
         taken.extend(left.into_iter().take(more));
     }
-    taken.sort_by(order);
+    sort_by_order(&mut taken);
     taken
 }
 
@@ -189,6 +240,51 @@ fn take_up_to(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn sort_by_order_equals_the_stable_sort() {
+        let mut rng = crate::rng::SplitMix64::new(7);
+        let specials = [0.0f32, -0.0, 1.0, -1.0, f32::NAN, -f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e-30];
+        for n in [0usize, 1, 2, 3, 17, 200, 1500] {
+            let v: Vec<Corner> = (0..n)
+                .map(|_| {
+                    let r = rng.next_u64();
+                    Corner {
+                        level: (r % 3) as u32,
+                        x: (r >> 8) as u32 % 5,
+                        y: (r >> 16) as u32 % 4,
+                        response: if r >> 60 < 6 {
+                            specials[(r >> 24) as usize % specials.len()]
+                        } else {
+                            ((r >> 32) % 7) as f32 * 0.5
+                        },
+                        sub: [(r >> 40) as i8 % 8, 0],
+                        fill: r >> 63 == 1,
+                    }
+                })
+                .collect();
+            let mut want = v.clone();
+            want.sort_by(order);
+            let mut got = v.clone();
+            sort_by_order(&mut got);
+            // compared bit for bit (NaN responses included), sub and fill too
+            let bits = |v: &[Corner]| {
+                v.iter().map(|c| (c.level, c.x, c.y, c.response.to_bits(), c.sub, c.fill)).collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&got), bits(&want), "n {n}");
+            // the same corners cut into lists (by level, and at random), merged
+            for by_level in [true, false] {
+                let mut lists = vec![Vec::new(); 4];
+                for (i, c) in v.iter().enumerate() {
+                    lists[if by_level { c.level as usize } else { i * 7 % 4 }].push(*c);
+                }
+                let concat: Vec<Corner> = lists.concat();
+                let mut want = concat.clone();
+                want.sort_by(order);
+                assert_eq!(bits(&merge_in_order(lists)), bits(&want), "n {n}, lists by level {by_level}");
+            }
+        }
+    }
+
     use super::*;
 
     fn c(level: u32, x: u32, y: u32, r: f32) -> Corner {
