@@ -54,32 +54,47 @@ pub fn sort_by_order(v: &mut [Corner]) {
 }
 
 /// The lists concatenated and sorted as `sort_by(order)` would sort them
-/// (stably): each list sorted on its own, in parallel, then merged, the
-/// earlier list first where keys tie. The sort of all corners had been
-/// serial work between the parallel detection and description.
-pub fn merge_in_order(mut lists: Vec<Vec<Corner>>) -> Vec<Corner> {
+/// (stably): each list sorted on its own, then merged pairwise, halves in
+/// parallel, the earlier list first where keys tie. The sort of all
+/// corners had been serial work between the parallel detection and
+/// description (~2 ms of a 3840x2160 frame's 20,000 corners).
+pub fn merge_in_order(lists: Vec<Vec<Corner>>) -> Vec<Corner> {
     use rayon::prelude::*;
-    let keys: Vec<Vec<u128>> = lists
-        .par_iter_mut()
-        .map(|v| {
-            sort_by_order(v);
-            v.iter().map(order_key).collect()
+    let mut keyed: Vec<Vec<(u128, Corner)>> = lists
+        .into_par_iter()
+        .map(|mut v| {
+            sort_by_order(&mut v);
+            v.into_iter().map(|c| (order_key(&c), c)).collect()
         })
         .collect();
-    let total = lists.iter().map(Vec::len).sum();
-    let mut heads = vec![0usize; lists.len()];
-    let mut out = Vec::with_capacity(total);
-    for _ in 0..total {
-        let mut best = usize::MAX;
-        for (l, k) in keys.iter().enumerate() {
-            if heads[l] < k.len() && (best == usize::MAX || k[heads[l]] < keys[best][heads[best]]) {
-                best = l;
+    merge_all(&mut keyed).into_iter().map(|(_, c)| c).collect()
+}
+
+/// [`merge_in_order`]'s merge of sorted keyed lists, earlier lists first on equal keys.
+fn merge_all(lists: &mut [Vec<(u128, Corner)>]) -> Vec<(u128, Corner)> {
+    match lists.len() {
+        0 => Vec::new(),
+        1 => std::mem::take(&mut lists[0]),
+        n => {
+            let (a, b) = lists.split_at_mut(n / 2);
+            let (a, b) = rayon::join(|| merge_all(a), || merge_all(b));
+            let mut out = Vec::with_capacity(a.len() + b.len());
+            let (mut i, mut j) = (0, 0);
+            while i < a.len() && j < b.len() {
+                // b's first only when strictly smaller: ties keep a's (earlier) first
+                if b[j].0 < a[i].0 {
+                    out.push(b[j]);
+                    j += 1;
+                } else {
+                    out.push(a[i]);
+                    i += 1;
+                }
             }
+            out.extend_from_slice(&a[i..]);
+            out.extend_from_slice(&b[j..]);
+            out
         }
-        out.push(lists[best][heads[best]]);
-        heads[best] += 1;
     }
-    out
 }
 
 /// ORB-SLAM's `DistributeOctTree` on one level: split the region into nodes
