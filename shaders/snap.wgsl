@@ -12,13 +12,28 @@
 // `subpixel`): the offset's steps are decided by comparisons of f32 sums and
 // products, each rounded once (WGSL rounds f32 + - * correctly, not /), and
 // packed into Kp.sub; the host builds the keypoint from them (src/gpu/readback.rs).
+// Two entry points: `snap_args` writes the dispatch size from the corner count
+// (indirect::CORNERS), then `snap` runs one invocation per corner.
 // Tests: tests/gpu_end_to_end.rs (whole pipeline with snap_radius 1 and 2 == CPU).
 
 @group(0) @binding(5) var<storage, read_write> corners: array<Kp>;
 @group(0) @binding(6) var<storage, read> mask: array<u32>;
+@group(0) @binding(7) var<storage, read_write> indirect: array<u32>;
 
 // counter::CORNERS in src/gpu/buffers.rs.
 const C_SNAP_CORNERS: u32 = 0u;
+// indirect::CORNERS in src/gpu/buffers.rs, in words.
+const I_SNAP_CORNERS: u32 = 0u;
+
+// The dispatch size of `snap`: one invocation per corner, 64 per workgroup
+// (as select.wgsl `args` writes it for its own passes over the corners).
+@compute @workgroup_size(1)
+fn snap_args() {
+    let n = min(counters[C_SNAP_CORNERS], P.capacity);
+    indirect[I_SNAP_CORNERS] = (n + 63u) / 64u;
+    indirect[I_SNAP_CORNERS + 1u] = 1u;
+    indirect[I_SNAP_CORNERS + 2u] = 1u;
+}
 
 fn harris_at(l: u32, x: u32, y: u32) -> f32 {
     let s = structure_sums(l, i32(x), i32(y));
