@@ -27,7 +27,7 @@ pub const ENTRIES: [(&str, &[Binding]); 2] = [("clear", CLEAR_BINDINGS), ("main"
 const CLEAR_BINDINGS: &[Binding] = &[PARAMS, BINDINGS[4]];
 
 /// Words `clear` zeroes per workgroup (`CLEAR_GROUP` in the shader).
-pub const CLEAR_GROUP: u32 = 256;
+pub const CLEAR_GROUP: u32 = 2048;
 
 /// The Harris response pass.
 #[derive(Debug)]
