@@ -40,7 +40,7 @@ fn order_key(c: &Corner) -> u128 {
     (r as u128) << 96 | (c.level as u128) << 64 | (c.y as u128) << 32 | c.x as u128
 }
 
-/// Sorts `v` as `v.sort_by(order)` does (stably), by [`order_key`], the
+/// Sorts `v` as `v.sort_by(order)` does (stably), by `order_key`, the
 /// index breaking ties: a key compare is one instruction pair where `order`
 /// chains a float compare and three more.
 pub fn sort_by_order(v: &mut [Corner]) {
