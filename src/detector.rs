@@ -202,6 +202,35 @@ impl Detector {
         self.features(image, mask)
     }
 
+    /// [`detect_and_compute`](Self::detect_and_compute) with `image` lent to
+    /// the CPU path as the pyramid's level 0 instead of copied
+    /// ([`CpuDetector::detect_and_compute_in`]; the GPU uploads it as
+    /// before). `image` is handed back unchanged.
+    pub fn detect_and_compute_in(
+        &self,
+        image: &mut Plane<u8>,
+        mask: Option<GrayView<'_>>,
+    ) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
+        if self.config().descriptor == crate::config::DescriptorKind::Opencv || image.width == 0 || image.height == 0 {
+            return self.detect_and_compute(image.view(), mask);
+        }
+        image.view().check()?;
+        #[cfg(feature = "gpu")]
+        {
+            // each closure borrows the image in turn (the CPU's only after a GPU failure)
+            let image = std::cell::RefCell::new(image);
+            self.run(
+                |g, ws| {
+                    let img = image.borrow();
+                    g.detect_and_compute(ws, img.view(), mask).map(|f| (f.keypoints, f.descriptors))
+                },
+                |c| c.detect_and_compute_in(&mut image.borrow_mut(), mask),
+            )
+        }
+        #[cfg(not(feature = "gpu"))]
+        self.cpu.detect_and_compute_in(image, mask)
+    }
+
     /// Keypoints and lfast descriptors on the active backend.
     fn features(&self, image: GrayView<'_>, mask: Option<GrayView<'_>>) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
         image.check()?;

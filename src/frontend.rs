@@ -144,6 +144,16 @@ impl Features {
         }
     }
 
+    /// [`detect_and_compute`](Self::detect_and_compute) with `img` lent to
+    /// L-FAST's CPU path as the pyramid's level 0 instead of copied
+    /// ([`Detector::detect_and_compute_in`]); handed back unchanged.
+    pub fn detect_and_compute_in(&self, img: &mut Plane<u8>) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
+        match self {
+            Features::Lfast(d) => d.detect_and_compute_in(img, None),
+            _ => self.detect_and_compute(img),
+        }
+    }
+
     /// Keypoints and their descriptors; `desc[i]` belongs to `kps[i]`.
     pub fn detect_and_compute(&self, img: &Plane<u8>) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {
         match self {

@@ -311,7 +311,7 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
         s.spawn(move || {
             let detect = |(i, st): (usize, Stage)| {
                 let st = match st {
-                    Stage::Decoded(img) => match det.detect_and_compute(&img) {
+                    Stage::Decoded(mut img) => match det.detect_and_compute_in(&mut img) {
                         Ok((kps, desc)) => {
                             let (width, height) = (img.width, img.height);
                             let img = if draw {
