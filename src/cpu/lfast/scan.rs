@@ -22,17 +22,30 @@ pub(super) struct Window<'a> {
     d: &'a [u8],
     s: &'a [u8],
     w: usize,
-    /// Index of `(0, y)`.
+    /// Index of `(0, y)` in `d`.
     c: usize,
+    /// Index of `(0, y)` in `s`.
+    cs: usize,
 }
 
 impl<'a> Window<'a> {
     /// The window around row `y` of `e` and of its support map `s` (as made by
     /// [`support_map_into`]); `None` where rows `y-7..=y+7` are not all in both.
+    #[cfg(test)]
     pub(super) fn new(e: &'a Plane<u8>, s: &'a [u8], y: usize) -> Option<Self> {
+        Self::in_band(e, s, y, 0)
+    }
+
+    /// [`Window::new`] with `s` holding the support map's rows from `r0` on
+    /// (as [`support_rows_into`] makes them); `None` where rows `y-7..=y+7`
+    /// are not all in `e` and in `s`.
+    pub(super) fn in_band(e: &'a Plane<u8>, s: &'a [u8], y: usize, r0: usize) -> Option<Self> {
         let w = e.width as usize;
-        let fits = w >= 15 && y >= 7 && (y + 8).checked_mul(w).is_some_and(|end| end <= e.data.len() && end <= s.len());
-        fits.then_some(Self { d: &e.data, s, w, c: y * w })
+        let fits = w >= 15
+            && y >= 7
+            && y - 7 >= r0
+            && (y + 8).checked_mul(w).is_some_and(|end| end <= e.data.len() && end - r0 * w <= s.len());
+        fits.then_some(Self { d: &e.data, s, w, c: y * w, cs: (y - r0) * w })
     }
 
     /// The `N` support-map bytes at columns `cx..cx+N` of row `y + dy`.
@@ -42,8 +55,9 @@ impl<'a> Window<'a> {
     #[inline(always)]
     unsafe fn support_bytes<const N: usize>(&self, cx: usize, dy: isize) -> &'a [u8; N] {
         debug_assert!((-7..=7).contains(&dy) && cx + N <= self.w);
-        let row = (self.c as isize + dy * self.w as isize) as usize;
-        // SAFETY: as in `bytes`, with s (which the invariant bounds as d).
+        let row = (self.cs as isize + dy * self.w as isize) as usize;
+        // SAFETY: as in `bytes`, with s and cs (y - 7 >= r0 and rows up to
+        // y + 7 in s: the invariant of `in_band`).
         unsafe { &*self.s.as_ptr().add(row + cx).cast::<[u8; N]>() }
     }
 
@@ -100,6 +114,7 @@ fn cols3(row: &[u8], n: usize) -> [&[u8]; 3] {
 /// edge or at least `support` of its 8 neighbours are, else 0. Only the first and last row and column are left
 /// as they were (corner tests never read them: q lies at most 6 pixels from
 /// p, p at least 7 from every side), so `s` can be reused without clearing.
+#[cfg(test)]
 pub(super) fn support_map_into(e: &Plane<u8>, support: u32, s: &mut Vec<u8>) {
     use rayon::prelude::*;
     let (w, h) = (e.width as usize, e.height as usize);
@@ -113,6 +128,31 @@ pub(super) fn support_map_into(e: &Plane<u8>, support: u32, s: &mut Vec<u8>) {
             let rows = &e.data[k * w..(k + 3) * w];
             support_row(&rows[..w], &rows[w..2 * w], &rows[2 * w..], support, out);
         });
+    }
+}
+
+/// [`support_map_into`]'s rows `r0..r1` only (clamped to the plane), row
+/// `r0` first, in `s` (grown to hold them, never shrunk; the first and last
+/// row and column of the plane are left as they were, as there): what a band
+/// of the L-FAST scan reads, rows `y-7..=y+7` of each of its rows y. A band
+/// of 64 rows computes 78 support rows (the seven above and below again),
+/// and a thread keeps a buffer of 78 rows instead of a level's map.
+pub(super) fn support_rows_into(e: &Plane<u8>, support: u32, r0: usize, r1: usize, s: &mut Vec<u8>) {
+    let (w, h) = (e.width as usize, e.height as usize);
+    let r1 = r1.min(h);
+    if r1 <= r0 {
+        return;
+    }
+    if s.len() < (r1 - r0) * w {
+        *s = vec![0; (r1 - r0) * w];
+    }
+    if w < 3 || h < 3 {
+        return;
+    }
+    for y in r0.max(1)..r1.min(h - 1) {
+        let rows = &e.data[(y - 1) * w..(y + 2) * w];
+        let out = &mut s[(y - r0) * w..(y - r0 + 1) * w];
+        support_row(&rows[..w], &rows[w..2 * w], &rows[2 * w..], support, out);
     }
 }
 
