@@ -24,18 +24,10 @@ pub const BINDINGS: &[Binding] = &[
     b(7, "indirect", Slot::ReadWrite),
 ];
 
-/// The bindings of `snap` itself: all but `indirect`, which its dispatch
-/// reads its size from (a buffer may not be bound as storage while it is the
-/// dispatch's indirect buffer).
-const SNAP_BINDINGS: &[Binding] = &[
-    PARAMS,
-    b(1, "cand_list", Slot::Read),
-    b(2, "counters", Slot::Read),
-    b(3, "denoised", Slot::Read),
-    b(4, "resp", Slot::ReadWrite),
-    b(5, "corners", Slot::ReadWrite),
-    b(6, "mask", Slot::Read),
-];
+/// The bindings of `snap` itself: all but `indirect` (the last), which its
+/// dispatch reads its size from (a buffer may not be bound as storage while
+/// it is the dispatch's indirect buffer).
+const SNAP_BINDINGS: &[Binding] = BINDINGS.split_at(BINDINGS.len() - 1).0;
 
 /// The snap pass: `snap_args` writes the dispatch size from the corner count
 /// (`indirect::CORNERS`, which the select pass rewrites alike), then one
