@@ -202,7 +202,7 @@ impl Detector {
         self.features(image, mask)
     }
 
-    /// [`detect_and_compute`](Self::detect_and_compute) with `image` lent to
+    /// [`detect_and_compute`](Self::detect_and_compute) with `image` handed to
     /// the CPU path as the pyramid's level 0 instead of copied
     /// ([`CpuDetector::detect_and_compute_in`]; the GPU uploads it as
     /// before). `image` is handed back unchanged.

@@ -144,7 +144,7 @@ impl Features {
         }
     }
 
-    /// [`detect_and_compute`](Self::detect_and_compute) with `img` lent to
+    /// [`detect_and_compute`](Self::detect_and_compute) with `img` handed to
     /// L-FAST's CPU path as the pyramid's level 0 instead of copied
     /// ([`Detector::detect_and_compute_in`]); handed back unchanged.
     pub fn detect_and_compute_in(&self, img: &mut Plane<u8>) -> Result<(Vec<KeyPoint>, Vec<Descriptor>)> {

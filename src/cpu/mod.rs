@@ -285,7 +285,7 @@ impl CpuDetector {
         })
     }
 
-    /// [`detect_and_compute`](Self::detect_and_compute) with `image` lent as
+    /// [`detect_and_compute`](Self::detect_and_compute) with `image` used as
     /// the pyramid's level 0 for the call instead of copied into the
     /// workspace: the copy and a plane the size of the frame saved (1 byte
     /// per pixel, 8 MB at 3840x2160). `image` is handed back unchanged, also
@@ -296,8 +296,8 @@ impl CpuDetector {
     /// let det = CpuDetector::new(Config::default()).unwrap();
     /// let mut img = Plane::from_vec(96, 64, (0..96 * 64).map(|i| ((i * 7) % 251) as u8).collect()).unwrap();
     /// let copy = img.clone();
-    /// let lent = det.detect_and_compute_in(&mut img, None).unwrap();
-    /// assert_eq!(lent, det.detect_and_compute(copy.view(), None).unwrap());
+    /// let in_place = det.detect_and_compute_in(&mut img, None).unwrap();
+    /// assert_eq!(in_place, det.detect_and_compute(copy.view(), None).unwrap());
     /// assert_eq!(img, copy);
     /// ```
     pub fn detect_and_compute_in(
@@ -624,7 +624,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_lent_image_comes_back_unchanged_also_on_an_error() {
+    fn an_image_used_in_place_comes_back_unchanged_also_on_an_error() {
         let det = CpuDetector::new(Config::default()).unwrap();
         let mut img = Plane::from_vec(80, 70, (0..80 * 70).map(|i| (i * 13 % 256) as u8).collect()).unwrap();
         let copy = img.clone();
@@ -632,9 +632,9 @@ mod tests {
         let e = det.detect_and_compute_in(&mut img, Some(m.view())).unwrap_err();
         assert!(matches!(e, Error::MaskSize { mask_width: 79, .. }), "{e}");
         assert_eq!(img, copy);
-        // and the workspace it went through still works, lent or copied
-        let lent = det.detect_and_compute_in(&mut img, None).unwrap();
-        assert_eq!(lent, det.detect_and_compute(copy.view(), None).unwrap());
+        // and the workspace it went through still works, in place or copied
+        let in_place = det.detect_and_compute_in(&mut img, None).unwrap();
+        assert_eq!(in_place, det.detect_and_compute(copy.view(), None).unwrap());
         assert_eq!(img, copy);
     }
 
