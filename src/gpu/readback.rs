@@ -75,6 +75,25 @@ struct Slot {
     profiled: bool,
     /// Frames recorded into this slot so far: a ticket names slot and generation.
     generation: u64,
+    /// The ring's number of the frame recorded last ([`Ring::recorded`]).
+    frame: u64,
+}
+
+/// What [`Ring::try_finish`] found.
+pub(crate) enum Finish {
+    /// The frame, complete.
+    Done(Frame),
+    /// Not mapped yet.
+    Pending,
+    /// The frame had more keypoints than its copy held, and a frame recorded
+    /// after it has since overwritten the spill holding the rest: run it
+    /// again (as the newest frame its spill stays whole).
+    Overrun {
+        /// Keypoints the frame had.
+        count: u64,
+        /// Keypoints its copy held.
+        copied: u64,
+    },
 }
 
 /// A frame recorded into a staging slot; redeem it with
@@ -99,6 +118,8 @@ pub(super) struct Ring {
     recent: std::collections::VecDeque<u64>,
     /// The copy before any frame was read back (0 = all slots).
     hint: u64,
+    /// Frames recorded so far; the spill holds the last one's keypoints.
+    recorded: u64,
 }
 
 /// Bytes of a staging buffer for `n` keypoints (timestamps after them).
@@ -139,9 +160,10 @@ impl Ring {
                 copied: 0,
                 profiled: false,
                 generation: 0,
+                frame: 0,
             })
             .collect();
-        Self { slots, next: 0, frame_slots, spill, recent: Default::default(), hint }
+        Self { slots, next: 0, frame_slots, spill, recent: Default::default(), hint, recorded: 0 }
     }
 
     /// The number of staging buffers.
@@ -210,6 +232,8 @@ impl Ring {
         slot.profiled = ts.is_some();
         slot.state = SlotState::Recorded;
         slot.generation += 1;
+        self.recorded += 1;
+        slot.frame = self.recorded;
         Ok(Ticket { slot: i, generation: slot.generation })
     }
 
@@ -235,20 +259,36 @@ impl Ring {
     }
 
     /// The frame if its staging buffer is mapped (someone must poll the
-    /// device), else `None`.
+    /// device), else `None`; an [`Finish::Overrun`] is an error naming it.
     pub(super) fn try_finish(&mut self, ctx: &GpuContext, cfg: &Config, t: Ticket) -> Result<Option<Frame>> {
+        match self.finish(ctx, cfg, t)? {
+            Finish::Done(f) => Ok(Some(f)),
+            Finish::Pending => Ok(None),
+            Finish::Overrun { count, copied } => Err(Error::Gpu {
+                reason: format!(
+                    "the frame had {count} keypoints, its readback copied {copied}, and a frame recorded after it \
+                     has overwritten the rest: finish a frame before recording the next when the counts may jump, \
+                     or raise GpuDetectorOptions::readback_hint"
+                ),
+            }),
+        }
+    }
+
+    /// [`try_finish`](Self::try_finish), telling an overrun apart.
+    pub(super) fn finish(&mut self, ctx: &GpuContext, cfg: &Config, t: Ticket) -> Result<Finish> {
+        let recorded = self.recorded;
         let slot = self.slot(t)?;
         if slot.state != SlotState::Mapping {
             return Err(Error::Gpu { reason: format!("readback slot {} is {:?}, not mapping", t.slot, slot.state) });
         }
         let done = slot.mapped.lock().ok().and_then(|mut g| g.take());
-        let Some(res) = done else { return Ok(None) };
+        let Some(res) = done else { return Ok(Finish::Pending) };
         slot.state = SlotState::Free;
         if let Err(e) = res {
             ctx.check_lost_polled()?;
             return Err(Error::Gpu { reason: format!("map_async: {e}") });
         }
-        let (copied, profiled) = (slot.copied, slot.profiled);
+        let (copied, profiled, spill_whole) = (slot.copied, slot.profiled, slot.frame == recorded);
         let end = staging_bytes(copied).min(slot.staging.size());
         let frame = {
             let view = slot
@@ -265,9 +305,12 @@ impl Ring {
             self.recent.pop_front();
         }
         if frame.count > copied {
+            if !spill_whole {
+                return Ok(Finish::Overrun { count: frame.count, copied });
+            }
             self.complete(ctx, cfg, &mut frame, copied)?;
         }
-        Ok(Some(frame))
+        Ok(Finish::Done(frame))
     }
 
     /// Reads keypoints `copied..count` from the spill (a frame with more
