@@ -181,19 +181,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for _ in 0..reps {
         for img in &imgs {
             if pending.len() == ws.ring_len() {
-                det.finish_readback(ws, pending.pop_front().ok_or("ring")?)?;
+                // wait for this frame's submission only: later ones keep the device busy
+                let (tk, index): (_, wgpu::SubmissionIndex) = pending.pop_front().ok_or("ring")?;
+                while det.try_finish_readback(ws, tk)?.is_none() {
+                    ctx.wait_for(index.clone())?;
+                }
                 done += 1;
             }
             ws.write_gray(&ctx.queue, img.view())?;
             let mut enc = ctx.device.create_command_encoder(&Default::default());
             det.encode(&mut enc, GpuInput::Written, ws)?;
             let tk = det.encode_readback(&mut enc, ws)?;
-            ctx.queue.submit([enc.finish()]);
+            let index = ctx.queue.submit([enc.finish()]);
             det.start_readback(ws, tk)?;
-            pending.push_back(tk);
+            pending.push_back((tk, index));
         }
     }
-    while let Some(tk) = pending.pop_front() {
+    while let Some((tk, _)) = pending.pop_front() {
         det.finish_readback(ws, tk)?;
         done += 1;
     }

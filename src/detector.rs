@@ -41,14 +41,14 @@ impl std::str::FromStr for Backend {
 }
 
 #[cfg(feature = "gpu")]
-struct Gpu {
-    det: GpuDetector,
-    ws: Mutex<Option<GpuWorkspace>>,
+pub(crate) struct Gpu {
+    pub(crate) det: GpuDetector,
+    pub(crate) ws: Mutex<Option<GpuWorkspace>>,
 }
 
 /// Built without the `gpu` feature: there is never a GPU (an uninhabited type).
 #[cfg(not(feature = "gpu"))]
-enum Gpu {}
+pub(crate) enum Gpu {}
 
 /// L-FAST on the GPU or the CPU, with the same results (see docs/algorithm.md).
 ///
@@ -155,7 +155,7 @@ impl Detector {
         self.cpu.config()
     }
 
-    fn active_gpu(&self) -> Option<&Gpu> {
+    pub(crate) fn active_gpu(&self) -> Option<&Gpu> {
         self.gpu.as_ref().filter(|_| !self.fell_back.load(std::sync::atomic::Ordering::Relaxed))
     }
 
@@ -175,19 +175,37 @@ impl Detector {
         };
         match r {
             Ok(v) => Ok(v),
+            Err(e) => {
+                self.fall_back(e)?;
+                on_cpu(&self.cpu)
+            }
+        }
+    }
+
+    /// After GPU error `e`: `Ok` when the frame goes to the CPU instead (Auto
+    /// mode, logged; after a device loss later frames too), else `Err(e)`.
+    #[cfg(feature = "gpu")]
+    pub(crate) fn fall_back(&self, e: Error) -> Result<()> {
+        match e {
             // bad input is the caller's error on either path
-            Err(e @ (Error::InvalidImage { .. } | Error::MaskSize { .. } | Error::InvalidConfig { .. })) => Err(e),
-            Err(e) if self.auto => {
+            Error::InvalidImage { .. } | Error::MaskSize { .. } | Error::InvalidConfig { .. } => Err(e),
+            e if self.auto => {
                 if matches!(e, Error::DeviceLost { .. } | Error::Gpu { .. }) {
                     self.fell_back.store(true, std::sync::atomic::Ordering::Relaxed);
                     log::warn!("GPU failed ({e}); this and later frames run on the CPU");
                 } else {
                     log::warn!("GPU cannot take this frame ({e}); it runs on the CPU");
                 }
-                on_cpu(&self.cpu)
+                Ok(())
             }
-            Err(e) => Err(e),
+            e => Err(e),
         }
+    }
+
+    /// The CPU path.
+    #[cfg(feature = "gpu")]
+    pub(crate) fn cpu(&self) -> &CpuDetector {
+        &self.cpu
     }
 
     /// Keypoints and descriptors (SPEC 1-11); `desc[i]` belongs to `kps[i]`.

@@ -56,6 +56,7 @@ mod keypoint;
 pub mod recording;
 pub mod rng;
 pub mod spec;
+mod stream;
 #[cfg(feature = "gpu")]
 #[doc(hidden)]
 pub mod testing;
@@ -67,6 +68,7 @@ pub use detector::{Backend, Detector};
 pub use error::{Error, Result};
 pub use image::{GrayView, Plane};
 pub use keypoint::{Descriptor, KeyPoint, hamming};
+pub use stream::{Done, FrameStream};
 /// The wgpu this crate is built against, so embedders use the same version.
 #[cfg(feature = "gpu")]
 pub use wgpu;

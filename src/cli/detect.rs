@@ -309,25 +309,49 @@ fn run_with(a: DetectArgs, write: Write) -> Result<bool, CliError> {
         drop(tx_dec);
         // stage 2: detect, several frames at once in the pool ([`frames_in_flight`])
         s.spawn(move || {
+            // a frame's results as the next stage takes them; its buffer to the decoders
+            let detected = |img: Plane<u8>, r: crate::Result<(Vec<KeyPoint>, Vec<Descriptor>)>| match r {
+                Ok((kps, desc)) => {
+                    let (width, height) = (img.width, img.height);
+                    let img = if draw {
+                        Some(img)
+                    } else {
+                        if let Ok(mut v) = spent.lock()
+                            && v.len() < keep_spent
+                        {
+                            v.push(img.data);
+                        }
+                        None
+                    };
+                    Stage::Detected(Detected { width, height, kps, desc, img })
+                }
+                Err(e) => Stage::Failed(report::reason(&e)),
+            };
+            // on the GPU: one stream, frames in flight while earlier ones are read back
+            if let Features::Lfast(d) = det {
+                let mut stream = d.stream::<usize>();
+                if stream.on_gpu() {
+                    let send = |d: crate::Done<usize>| {
+                        let _ = tx_det.send((d.tag, detected(d.image, d.result)));
+                    };
+                    for (i, st) in rx_dec {
+                        match st {
+                            Stage::Decoded(img) => stream.push(i, img).into_iter().for_each(send),
+                            other => {
+                                let _ = tx_det.send((i, other));
+                            }
+                        }
+                    }
+                    stream.finish().into_iter().for_each(send);
+                    return;
+                }
+            }
             let detect = |(i, st): (usize, Stage)| {
                 let st = match st {
-                    Stage::Decoded(mut img) => match det.detect_and_compute_in(&mut img) {
-                        Ok((kps, desc)) => {
-                            let (width, height) = (img.width, img.height);
-                            let img = if draw {
-                                Some(img)
-                            } else {
-                                if let Ok(mut v) = spent.lock()
-                                    && v.len() < keep_spent
-                                {
-                                    v.push(img.data);
-                                }
-                                None
-                            };
-                            Stage::Detected(Detected { width, height, kps, desc, img })
-                        }
-                        Err(e) => Stage::Failed(report::reason(&e)),
-                    },
+                    Stage::Decoded(mut img) => {
+                        let r = det.detect_and_compute_in(&mut img);
+                        detected(img, r)
+                    }
                     other => other,
                 };
                 let _ = tx_det.send((i, st));

@@ -337,6 +337,16 @@ impl GpuContext {
         self.device.features().contains(wgpu::Features::TIMESTAMP_QUERY)
     }
 
+    /// Blocks until submission `index` (and those before it) has run; later
+    /// submissions may still be running.
+    pub fn wait_for(&self, index: wgpu::SubmissionIndex) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
+            .map(|_| ())
+            .map_err(|e| Error::Gpu { reason: format!("poll: {e}") })?;
+        self.check_lost()
+    }
+
     /// Waits until all submitted work is done.
     pub fn wait(&self) -> Result<()> {
         self.device

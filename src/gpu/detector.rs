@@ -9,7 +9,7 @@
 
 use super::buffers::Buffers;
 use super::context::{GpuContext, map_blocking};
-use super::readback::Ring;
+use super::readback::{Finish, Ring};
 pub use super::readback::{Frame, Ticket, to_keypoint};
 pub use super::stages::STAGES;
 use super::stages::{Bound, Passes, Timestamps};
@@ -382,6 +382,12 @@ impl GpuDetector {
     pub fn try_finish_readback(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<Option<Frame>> {
         self.ctx.check_lost()?;
         ws.ring.try_finish(&self.ctx, &self.cfg, t)
+    }
+
+    /// [`try_finish_readback`](Self::try_finish_readback) telling an overrun apart.
+    pub(crate) fn finish_frame(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<Finish> {
+        self.ctx.check_lost()?;
+        ws.ring.finish(&self.ctx, &self.cfg, t)
     }
 
     /// Waits for a frame's readback and returns it.
