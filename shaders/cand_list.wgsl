@@ -19,8 +19,6 @@
 @group(0) @binding(3) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> indirect: array<u32>;
 
-// counter::CANDS in src/gpu/buffers.rs.
-const C_CANDS: u32 = 3u;
 // indirect::CANDS / 4 in src/gpu/buffers.rs.
 const I_CANDS: u32 = 16u;
 

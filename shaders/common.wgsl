@@ -1,5 +1,7 @@
 // Prepended to every stage shader (see src/gpu/kernel.rs). Mirrors
-// `Params` in src/gpu/layout.rs field for field.
+// `Params` in src/gpu/layout.rs field for field. After it comes the slots of
+// the `counters` buffer, C_CORNERS, C_KEYPOINTS, ... (counter::wgsl in
+// src/gpu/buffers.rs).
 //
 // Every per-pixel buffer is an atlas: level l occupies
 // [levels[l].z, levels[l].z + w*h) in row-major order, one u32 per pixel.

@@ -15,10 +15,6 @@
 @group(0) @binding(4) var<storage, read_write> corners: array<Kp>;
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
 
-// counter::CORNERS and counter::CANDS in src/gpu/buffers.rs.
-const C_CORNERS: u32 = 0u;
-const C_CANDS: u32 = 3u;
-
 // True iff candidate q beats candidate p: a greater response, or an equal one
 // and an earlier (y, x) position, so exactly one of a tied group survives.
 fn beats(rq: f32, q: vec2<u32>, rp: f32, p: vec2<u32>) -> bool {

@@ -77,8 +77,7 @@
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> indirect: array<u32>;
 
-// counter::WALKS and indirect::WALKS / 4 in src/gpu/buffers.rs.
-const C_WALKS: u32 = 5u;
+// indirect::WALKS / 4 in src/gpu/buffers.rs.
 const I_WALKS: u32 = 24u;
 // A walk list entry past the list's end.
 const NO_WALK: u32 = 0xffffffffu;

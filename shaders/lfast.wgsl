@@ -27,10 +27,7 @@
 @group(0) @binding(7) var<storage, read_write> cand_list: array<u32>;
 @group(0) @binding(8) var<storage, read_write> indirect: array<u32>;
 
-// counter::EDGES, counter::CANDS, indirect::EDGES / 4 and indirect::CANDS / 4
-// in src/gpu/buffers.rs.
-const C_EDGES: u32 = 4u;
-const C_CANDS: u32 = 3u;
+// indirect::EDGES / 4 and indirect::CANDS / 4 in src/gpu/buffers.rs.
 const I_EDGES: u32 = 20u;
 const I_CANDS: u32 = 16u;
 

@@ -16,7 +16,6 @@
 // Races: no atomics. Invocation k of keypoint i's workgroup stores word
 // descriptors[8 i + k] only, so no two invocations write one word.
 
-const KEYPOINTS: u32 = 1u; // counter::KEYPOINTS
 const PI: f32 = 3.14159265358979323846;
 
 // `smoothed` is Buffers::smooth (`smooth` is a WGSL reserved word).
@@ -53,7 +52,7 @@ fn rotate(p: vec4<i32>, c: f32, s: f32) -> vec4<i32> {
 @compute @workgroup_size(8, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     let i = wg.y * 65535u + wg.x;
-    if (i >= counters[KEYPOINTS] || i >= P.capacity) { return; }
+    if (i >= counters[C_KEYPOINTS] || i >= P.capacity) { return; }
     let kp = keypoints[i];
     if (kp.level >= P.n_levels) { return; }
     if (P.snap_radius > 0u && P.orientation_bins > 0u) {

@@ -14,7 +14,6 @@
 // Races: invocation i stores keypoints[i] only (a whole keypoint, read and
 // written by the same invocation), so no two invocations write one word.
 
-const KEYPOINTS: u32 = 1u; // counter::KEYPOINTS
 const HALF_PATCH: i32 = 15;
 // OpenCV ORB's umax: half-width of row v of the radius-15 disc (cpu::orientation::UMAX).
 const UMAX: array<i32, 16> = array<i32, 16>(15, 15, 15, 15, 14, 14, 14, 13, 13, 12, 11, 10, 9, 8, 6, 3);
@@ -133,7 +132,7 @@ fn angle_deg(m: vec2<i32>) -> f32 {
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let i = list_index(wg, li);
-    if (i >= counters[KEYPOINTS] || i >= P.capacity) { return; }
+    if (i >= counters[C_KEYPOINTS] || i >= P.capacity) { return; }
     // Every lane reads the three fields it needs, not the whole record (a
     // SIMD software rasteriser reads each field lane by lane).
     let level = keypoints[i].level;

@@ -23,9 +23,6 @@
 @group(0) @binding(3) var<storage, read> denoised: array<u32>;
 @group(0) @binding(4) var<storage, read_write> resp: array<u32>;
 
-// counter::CANDS in src/gpu/buffers.rs.
-const C_CANDS: u32 = 3u;
-
 // BLOCK / 2.
 const R: i32 = 3;
 // HARRIS_K = 0.04f32.

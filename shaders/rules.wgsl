@@ -21,9 +21,6 @@
 @group(0) @binding(3) var<storage, read_write> walks: array<u32>;
 @group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
 
-// counter::WALKS in src/gpu/buffers.rs.
-const C_WALKS: u32 = 5u;
-
 // The workgroup's listed walks, and where they start in `walks`.
 var<workgroup> wg_walks: atomic<u32>;
 var<workgroup> wg_base: u32;

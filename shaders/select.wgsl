@@ -71,12 +71,6 @@ const B_BEFORE: u32 = 2u * BUCKETS;
 const B_TAKEN_BEFORE: u32 = 3u * BUCKETS;
 const B_CURSOR: u32 = 4u * BUCKETS;
 
-// counter::* in src/gpu/buffers.rs.
-const C_CORNERS: u32 = 0u;
-const C_KEYPOINTS: u32 = 1u;
-const C_TAKEN: u32 = 2u;
-const C_MAG_MAX: u32 = 6u;
-const C_MAG_MIN: u32 = 7u;
 // indirect::* in src/gpu/buffers.rs, in words.
 const I_CORNERS: u32 = 0u;
 const I_KEYPOINTS: u32 = 4u;

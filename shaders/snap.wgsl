@@ -20,8 +20,6 @@
 @group(0) @binding(6) var<storage, read> mask: array<u32>;
 @group(0) @binding(7) var<storage, read_write> indirect: array<u32>;
 
-// counter::CORNERS in src/gpu/buffers.rs.
-const C_SNAP_CORNERS: u32 = 0u;
 // indirect::CORNERS in src/gpu/buffers.rs, in words.
 const I_SNAP_CORNERS: u32 = 0u;
 
@@ -29,7 +27,7 @@ const I_SNAP_CORNERS: u32 = 0u;
 // (as select.wgsl `args` writes it for its own passes over the corners).
 @compute @workgroup_size(1)
 fn snap_args() {
-    let n = min(counters[C_SNAP_CORNERS], P.capacity);
+    let n = min(counters[C_CORNERS], P.capacity);
     indirect[I_SNAP_CORNERS] = (n + 63u) / 64u;
     indirect[I_SNAP_CORNERS + 1u] = 1u;
     indirect[I_SNAP_CORNERS + 2u] = 1u;
@@ -64,7 +62,7 @@ fn subpixel(a: f32, r0: f32, b: f32) -> i32 {
 fn snap(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let k = list_index(wg, li);
     let s = P.snap_radius;
-    if (s == 0u || k >= min(counters[C_SNAP_CORNERS], P.capacity)) { return; }
+    if (s == 0u || k >= min(counters[C_CORNERS], P.capacity)) { return; }
     var c = corners[k];
     let l = c.level;
     // corners lie in [border, size - border): the square is cut to it

@@ -106,7 +106,8 @@ pub mod indirect {
     pub const SIZE: u64 = 112;
 }
 
-/// Slots of [`Buffers::counters`].
+/// Slots of [`Buffers::counters`]. The shaders see them as `C_CORNERS`,
+/// `C_KEYPOINTS`, ... ([`counter::wgsl`]).
 pub mod counter {
     /// Corners appended by corner NMS.
     pub const CORNERS: usize = 0;
@@ -126,6 +127,29 @@ pub mod counter {
     pub const MAG_MIN: usize = 7;
     /// Words in the buffer.
     pub const LEN: usize = 8;
+
+    /// Every counter by its WGSL name.
+    pub const ALL: [(&str, usize); 8] = [
+        ("C_CORNERS", CORNERS),
+        ("C_KEYPOINTS", KEYPOINTS),
+        ("C_TAKEN", TAKEN),
+        ("C_CANDS", CANDS),
+        ("C_EDGES", EDGES),
+        ("C_WALKS", WALKS),
+        ("C_MAG_MAX", MAG_MAX),
+        ("C_MAG_MIN", MAG_MIN),
+    ];
+
+    /// The counters as WGSL constants, part of every shader's prelude
+    /// ([`full_source`](crate::gpu::kernel::full_source)): one definition.
+    ///
+    /// ```
+    /// let w = lfast::gpu::buffers::counter::wgsl();
+    /// assert!(w.contains("const C_CANDS: u32 = 3u;"));
+    /// ```
+    pub fn wgsl() -> String {
+        ALL.iter().map(|(name, i)| format!("const {name}: u32 = {i}u;\n")).collect()
+    }
 }
 
 /// How much the buffers were allocated for; a frame whose layout fits reuses them.

@@ -44,9 +44,10 @@ pub const PARAMS: Binding = b(0, "P", Slot::Uniform);
 /// Size of one record of a dynamic-offset uniform (the minimum alignment wgpu guarantees).
 pub const DYNAMIC_STRIDE: u64 = 256;
 
-/// A shader's full source: the common prelude followed by the stage.
+/// A shader's full source: the common prelude, the counters' slots
+/// ([`counter::wgsl`](super::buffers::counter::wgsl)), then the stage.
 pub fn full_source(stage_source: &str) -> String {
-    format!("{COMMON}\n{stage_source}")
+    format!("{COMMON}\n{}\n{stage_source}", super::buffers::counter::wgsl())
 }
 
 /// Compiles a stage shader (prelude + `stage_source`) into a module.

@@ -96,7 +96,11 @@ impl Pass for LfastPass {
         // stages after it (corner NMS's CORNERS, select's KEYPOINTS and TAKEN)
         // start at 0. (`windows` zeroes `cand`, which shares its memory with
         // `classes`, before `main` sets the corners' bytes.)
-        const { assert!(counter::EDGES == 4 && counter::CANDS < 4 && counter::TAKEN < 4) };
+        const {
+            assert!(
+                counter::CANDS < counter::EDGES && counter::TAKEN < counter::EDGES && counter::WALKS > counter::EDGES
+            )
+        };
         encoder.clear_buffer(&b.counters, 0, Some(4 * (counter::EDGES as u64 + 1)));
     }
 }

@@ -23,7 +23,8 @@ use crate::error::{Error, Result};
 use crate::keypoint::{Descriptor, KeyPoint};
 use crate::spec::{self, angle};
 
-/// Bytes before the keypoints in a staging buffer: the first four counters.
+/// Bytes before the keypoints in a staging buffer: the keypoint count
+/// (`counter::KEYPOINTS`) and the three words after it.
 const HEADER: u64 = 16;
 /// Bytes of one keypoint and its descriptor.
 const SLOT_BYTES: u64 = (KP_WORDS + DESC_WORDS) * 4;
@@ -210,7 +211,8 @@ impl Ring {
         }
         let kp_bytes = want * KP_WORDS * 4;
         let desc_bytes = want * DESC_WORDS * 4;
-        enc.copy_buffer_to_buffer(&b.counters, 0, &slot.staging, 0, HEADER);
+        // the header: the keypoint count (and the three words after it)
+        enc.copy_buffer_to_buffer(&b.counters, counter::KEYPOINTS as u64 * 4, &slot.staging, 0, HEADER);
         enc.copy_buffer_to_buffer(&b.keypoints, 0, &slot.staging, HEADER, kp_bytes);
         enc.copy_buffer_to_buffer(&b.descriptors, 0, &slot.staging, HEADER + kp_bytes, desc_bytes);
         if let Some(spill) = &self.spill {
@@ -384,8 +386,8 @@ fn parse_frame(cfg: &Config, bytes: &[u8], slots: u64, ts: bool, period_ns: f32)
     if (bytes.len() as u64) < HEADER + slots * SLOT_BYTES {
         return Err(short());
     }
-    let counters: [u32; 4] = pod_vec::<u32>(bytes, 0, 4).try_into().map_err(|_| short())?;
-    let count = counters[counter::KEYPOINTS] as u64;
+    let header: [u32; 4] = pod_vec::<u32>(bytes, 0, 4).try_into().map_err(|_| short())?;
+    let count = header[0] as u64;
     let n = count.min(slots) as usize;
     let kp_off = HEADER as usize;
     let desc_off = kp_off + slots as usize * KP_WORDS as usize * 4;
