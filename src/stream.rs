@@ -1,10 +1,10 @@
-//! [`FrameStream`]: a batch of frames through one [`Detector`], the GPU never
+//! [`FrameStream`]: a batch of frames through one [`Detector`], the GPU not
 //! waiting for the host. Frame n+1 is uploaded and submitted before frame n is
 //! read back, up to the workspace's ring of staging buffers
 //! ([`GpuDetectorOptions::ring`](crate::gpu::GpuDetectorOptions::ring)); one
-//! frame at a time, the device idles through every readback and upload (51
-//! KITTI frames on lavapipe: see BENCHMARKS.md, "lavapipe"). On the CPU a
-//! frame runs when it is pushed.
+//! frame at a time, the device idles through every readback and upload. On a
+//! software adapter one frame is in flight ([`Detector::stream`] says why);
+//! on the CPU a frame runs when it is pushed.
 //!
 //! Tests: tests/stream.rs (CPU) and tests/gpu_stream.rs (GPU == blocking calls,
 //! overruns, size changes, bad frames).
@@ -61,11 +61,27 @@ impl Detector {
     /// the GPU fails in Auto mode runs on the CPU as with a single call.
     /// The stream holds the GPU workspace: other calls on this detector wait
     /// until it is dropped.
+    ///
+    /// Frames in flight: as many as the workspace's ring holds, but one on a
+    /// software adapter (lavapipe), which runs each dispatch on all the CPU's
+    /// cores, split evenly up front, so that host work overlapping it (the
+    /// next frame's upload and recording) stalls the dispatch's other threads
+    /// at its end (51 KITTI frames on two cores: 1.93-2.00 s one at a time,
+    /// 2.17-2.40 s three in flight). [`stream_with`](Self::stream_with) sets it.
     pub fn stream<T>(&self) -> FrameStream<'_, T> {
+        self.stream_with(0)
+    }
+
+    /// [`stream`](Self::stream) with at most `in_flight` frames on the GPU
+    /// (at least one, at most the ring's; 0 = the default).
+    pub fn stream_with<T>(&self, in_flight: usize) -> FrameStream<'_, T> {
         #[cfg(feature = "gpu")]
-        return FrameStream { det: self, gpu: gpu::InFlight::new(self) };
+        return FrameStream { det: self, gpu: gpu::InFlight::new(self, in_flight) };
         #[cfg(not(feature = "gpu"))]
-        FrameStream { det: self, _tag: std::marker::PhantomData }
+        {
+            let _ = in_flight;
+            FrameStream { det: self, _tag: std::marker::PhantomData }
+        }
     }
 }
 
@@ -138,11 +154,13 @@ mod gpu {
         gpu: &'a Gpu,
         ws: MutexGuard<'a, Option<GpuWorkspace>>,
         pub(super) pending: VecDeque<Pending<T>>,
+        /// Frames in flight at most: the ring's, or one on a software adapter.
+        depth: usize,
     }
 
     impl<'a, T> InFlight<'a, T> {
         /// The GPU side of a stream, when frames run on the GPU.
-        pub(super) fn new(det: &'a Detector) -> Option<Self> {
+        pub(super) fn new(det: &'a Detector, in_flight: usize) -> Option<Self> {
             // the opencv descriptor is described on the CPU (Detector::detect_and_compute)
             if det.config().descriptor == DescriptorKind::Opencv {
                 return None;
@@ -150,7 +168,13 @@ mod gpu {
             let gpu = det.active_gpu()?;
             // a poisoned lock: the blocking calls report it, frame by frame
             let ws = gpu.ws.lock().ok()?;
-            Some(Self { gpu, ws, pending: VecDeque::new() })
+            // Detector::stream says why one on a software adapter
+            let depth = match in_flight {
+                0 if crate::gpu::is_software(&gpu.det.context().info) => 1,
+                0 => usize::MAX,
+                n => n,
+            };
+            Some(Self { gpu, ws, pending: VecDeque::new(), depth })
         }
 
         /// Submits `image`, returning the frames finished meanwhile; the frame
@@ -170,7 +194,7 @@ mod gpu {
             let mut out = Vec::new();
             // a new size needs a new workspace: finish the frames of the old one
             let same = self.ws.as_ref().is_some_and(|ws| ws.buffers.size() == (image.width, image.height));
-            let ring = self.ws.as_ref().map_or(1, |ws| ws.ring_len()).max(1);
+            let ring = self.ws.as_ref().map_or(1, |ws| ws.ring_len()).clamp(1, self.depth);
             if !same || self.pending.len() >= ring {
                 let keep = if same { ring - 1 } else { 0 };
                 while self.pending.len() > keep {
