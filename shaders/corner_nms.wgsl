@@ -83,8 +83,13 @@ fn suppress(l: u32, p: vec2<u32>) {
 // Work-efficient: an indirect dispatch over the candidate list, one
 // invocation per candidate (cand_list.wgsl).
 @compute @workgroup_size(64, 1, 1)
-fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    let k = list_index(wg, li);
+fn main(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(local_invocation_id) li: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    // the list's runs interleaved between the dispatch's halves (common.wgsl)
+    let k = list_index_spread(wg, li, nwg);
     if (k >= atomicLoad(&counters[C_CANDS])) { return; }
     let p = atlas_pixel(cand_list[k]);
     suppress(p.z, p.xy);
