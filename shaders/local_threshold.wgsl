@@ -7,10 +7,12 @@
 // histogram hist[l * 256 + M8] (the cells partition the level, so summing
 // their bins counts every pixel once: histogram.wgsl's result, without a
 // count of its own in gradient_nms). Two entry points:
-// - cells: one workgroup per cell, workgroup_id = (column, row, level),
-//   dispatch (most cells along x, along y, n_levels); it counts the cell in
-//   workgroup memory and adds each bin to every window holding the cell and
-//   to the level's histogram.
+// - cells: one workgroup per cell, workgroup_id = (column, row, z),
+//   dispatch (most cells along x, along y, n_levels), z the level's place in
+//   gpu::layout::halves_order (llvmpipe gives each thread a contiguous share
+//   of the workgroups: in level order the first of two had 80% of the
+//   pixels); it counts the cell in workgroup memory and adds each bin to
+//   every window holding the cell and to the level's histogram.
 //   CELL_INVOCATIONS (8) invocations: a KITTI cell is ~120x40 pixels at
 //   level 0 and ~30x10 at level 7, so a few columns each. Workgroup-wide
 //   work (the windows holding the cell, the barrier, the bins' walk) costs
@@ -119,8 +121,9 @@ fn cells(
     @builtin(local_invocation_index) li: u32,
     @builtin(workgroup_id) wg: vec3<u32>,
 ) {
-    let l = wg.z;
-    if (l >= P.n_levels) { return; }
+    if (wg.z >= P.n_levels) { return; }
+    // the level of this z: two halves of about equal pixels (gpu::layout::halves_order)
+    let l = grid[P.cells + 4u * P.n_levels + wg.z];
     let hdr = P.cells + 4u * l;
     let cxo = grid[hdr];
     let ncx = grid[hdr + 1u];
