@@ -71,30 +71,64 @@ fn snap(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let y0 = max(select(0u, c.py - s, c.py >= s), b);
     let x1 = min(c.px + s, lw(l) - b - 1u);
     let y1 = min(c.py + s, lh(l) - b - 1u);
+    // The responses in one loop, so harris_at (structure_sums, nine col9
+    // calls) has one call site: each site is inlined whole, and six of them
+    // made this the slowest pipeline to build on lavapipe (65 of the stages'
+    // 225 ms, one thread). Step 0 is the corner itself (the best so far),
+    // steps 1..n the square row by row (first of equal responses wins), the
+    // last four the best's left, right, upper and lower neighbours for the
+    // sub-pixel peak (when both of a pair are inside the level).
     var bx = c.px;
     var by = c.py;
-    var br = harris_at(l, c.px, c.py);
-    for (var y = y0; y <= y1; y++) {
-        for (var x = x0; x <= x1; x++) {
+    var br = 0.0;
+    let n = (x1 - x0 + 1u) * (y1 - y0 + 1u);
+    var side = array<f32, 4>(0.0, 0.0, 0.0, 0.0);
+    var sx = x0;
+    var sy = y0;
+    for (var i = 0u; i < n + 5u; i++) {
+        var x = c.px;
+        var y = c.py;
+        var take = true;
+        if (i >= 1u && i <= n) {
+            x = sx;
+            y = sy;
+            sx += 1u;
+            if (sx > x1) {
+                sx = x0;
+                sy += 1u;
+            }
             let own = x == c.px && y == c.py;
             let off = P.use_mask != 0u && mask[loff(l) + y * lw(l) + x] == 0u;
-            if (!own && !off) {
-                let r = harris_at(l, x, y);
-                if (r > br || (r == br && (y < by || (y == by && x < bx)))) {
-                    bx = x;
-                    by = y;
-                    br = r;
-                }
+            take = !own && !off;
+        } else if (i > n) {
+            let t = i - n - 1u;
+            let horizontal = t < 2u;
+            take = select(by >= 1u && by + 1u < lh(l), bx >= 1u && bx + 1u < lw(l), horizontal);
+            let d = select(1u, 0xffffffffu, (t & 1u) == 0u);  // -1 for left and up
+            x = select(bx, bx + d, horizontal);
+            y = select(by + d, by, horizontal);
+        }
+        if (!take) { continue; }
+        let r = harris_at(l, x, y);
+        if (i == 0u) {
+            br = r;
+        } else if (i <= n) {
+            if (r > br || (r == br && (y < by || (y == by && x < bx)))) {
+                bx = x;
+                by = y;
+                br = r;
             }
+        } else {
+            side[i - n - 1u] = r;
         }
     }
     var qx = 0;
     var qy = 0;
     if (bx >= 1u && bx + 1u < lw(l)) {
-        qx = subpixel(harris_at(l, bx - 1u, by), br, harris_at(l, bx + 1u, by));
+        qx = subpixel(side[0], br, side[1]);
     }
     if (by >= 1u && by + 1u < lh(l)) {
-        qy = subpixel(harris_at(l, bx, by - 1u), br, harris_at(l, bx, by + 1u));
+        qy = subpixel(side[2], br, side[3]);
     }
     let sc = P.scales[l];
     c.px = bx;
