@@ -6,8 +6,8 @@
 //! software adapter one frame is in flight ([`Detector::stream`] says why);
 //! on the CPU a frame runs when it is pushed.
 //!
-//! Tests: tests/stream.rs (CPU) and tests/gpu_stream.rs (GPU == blocking calls,
-//! overruns, size changes, bad frames).
+//! Tests: tests/gpu_stream.rs (GPU == one CPU call per frame through size
+//! changes, refused frames and overruns; the CPU stream).
 
 use crate::detector::Detector;
 use crate::error::Result;

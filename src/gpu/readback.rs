@@ -80,7 +80,7 @@ struct Slot {
     frame: u64,
 }
 
-/// What [`Ring::try_finish`] found.
+/// What [`Ring::finish`] found.
 pub(crate) enum Finish {
     /// The frame, complete.
     Done(Frame),
