@@ -1237,3 +1237,37 @@ fn auto_fallback_after_a_device_loss_keeps_every_frame() {
     let e = CpuDetector::new(gpu.config().clone()).unwrap().edge_image(img.view()).unwrap();
     assert_eq!(det.edge_image(img.view()).unwrap(), e);
 }
+
+#[test]
+fn streams_run_a_frame_over_the_limits_on_the_cpu_or_name_the_limit() {
+    let Some(_) = t::context() else { return };
+    // 4 MiB buffers: 400x300 fits, 800x600 does not (frames_over_small_limits_are_gpu_limits_errors)
+    let ctx = context_with_limits(small_buffers(4 << 20)).unwrap();
+    let cfg = Config::default();
+    let cpu = CpuDetector::new(cfg.clone()).unwrap();
+    let frames = [t::test_image(400, 300, 7), t::test_image(800, 600, 6), t::test_image(400, 300, 8)];
+    let run = |det: &Detector| {
+        let mut stream = det.stream_with::<usize>(3);
+        let mut done: Vec<_> = frames.iter().cloned().enumerate().flat_map(|(i, f)| stream.push(i, f)).collect();
+        done.extend(stream.finish());
+        done.sort_by_key(|d| d.tag);
+        done
+    };
+    // with the fallback (Backend::Auto's behaviour): the large frame on the CPU, the
+    // others on the GPU, and the GPU still in use after it
+    let auto = Detector::from_context_with_fallback(ctx.clone(), cfg.clone()).unwrap();
+    for d in run(&auto) {
+        let want = cpu.detect_and_compute(frames[d.tag].view(), None).unwrap();
+        assert_eq!(d.result.as_ref().expect("every frame detected"), &want, "frame {}", d.tag);
+    }
+    assert_eq!(auto.backend_name(), "gpu", "a frame over the limits is no device failure");
+    // without: the large frame is a GpuLimits error in its place, the others come back
+    let gpu = Detector::from_context(ctx, cfg).unwrap();
+    for d in run(&gpu) {
+        match (d.tag, &d.result) {
+            (1, Err(e)) => assert!(matches!(e, Error::GpuLimits { .. }), "{e}"),
+            (1, Ok(_)) => panic!("800x600 does not fit 4 MiB buffers"),
+            (i, r) => assert_eq!(r.as_ref().unwrap(), &cpu.detect_and_compute(frames[i].view(), None).unwrap()),
+        }
+    }
+}
