@@ -136,7 +136,7 @@ mod gpu {
     use crate::config::DescriptorKind;
     use crate::detector::{Detector, Gpu};
     use crate::error::Error;
-    use crate::gpu::detector::{GpuInput, GpuWorkspace, Ticket};
+    use crate::gpu::detector::{GpuWorkspace, Ticket};
     use crate::gpu::readback::Finish;
     use crate::image::Plane;
     use std::collections::VecDeque;
@@ -210,22 +210,7 @@ mod gpu {
 
         /// Uploads, records and submits one frame; starts its readback.
         fn submit(&mut self, image: &Plane<u8>) -> crate::Result<(Ticket, wgpu::SubmissionIndex)> {
-            let g = &self.gpu.det;
-            g.prepare_workspace(&mut self.ws, image.width, image.height)?;
-            let ws = self.ws.as_mut().ok_or_else(|| Error::Gpu { reason: "no workspace".into() })?;
-            g.set_mask(ws, None)?;
-            let ctx = g.context();
-            ws.write_gray(&ctx.queue, image.view())?;
-            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lfast") });
-            let recorded = g.encode(&mut enc, GpuInput::Written, ws).and_then(|()| g.encode_readback(&mut enc, ws));
-            let index = ctx.queue.submit([enc.finish()]);
-            if let Some(e) = pollster::block_on(scope.pop()) {
-                return Err(Error::Gpu { reason: e.to_string() });
-            }
-            let ticket = recorded?;
-            g.start_readback(ws, ticket)?;
-            Ok((ticket, index))
+            self.gpu.det.submit(&mut self.ws, image.view(), None)
         }
 
         /// The oldest frame in flight, read back (or redone, or run on the CPU).

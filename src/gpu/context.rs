@@ -340,17 +340,18 @@ impl GpuContext {
     /// Blocks until submission `index` (and those before it) has run; later
     /// submissions may still be running.
     pub fn wait_for(&self, index: wgpu::SubmissionIndex) -> Result<()> {
-        self.device
-            .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
-            .map(|_| ())
-            .map_err(|e| Error::Gpu { reason: format!("poll: {e}") })?;
-        self.check_lost()
+        self.wait_until(Some(index))
     }
 
     /// Waits until all submitted work is done.
     pub fn wait(&self) -> Result<()> {
+        self.wait_until(None)
+    }
+
+    /// Blocks until submission `index` (None: the latest) has run.
+    fn wait_until(&self, index: Option<wgpu::SubmissionIndex>) -> Result<()> {
         self.device
-            .poll(wgpu::PollType::wait_indefinitely())
+            .poll(wgpu::PollType::Wait { submission_index: index, timeout: None })
             .map(|_| ())
             .map_err(|e| Error::Gpu { reason: format!("poll: {e}") })?;
         self.check_lost()

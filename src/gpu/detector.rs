@@ -323,6 +323,20 @@ impl GpuDetector {
         image: GrayView<'_>,
         mask: Option<GrayView<'_>>,
     ) -> Result<Frame> {
+        let (t, _) = self.submit(ws, image, mask)?;
+        let ws = ws.as_mut().ok_or_else(|| Error::Gpu { reason: "no workspace".into() })?;
+        self.finish_readback(ws, t)
+    }
+
+    /// Uploads `image`, records the whole pipeline and its readback, submits
+    /// them and starts the readback: [`detect_and_compute`](Self::detect_and_compute)
+    /// up to the wait, and each frame of [`Detector::stream`](crate::Detector::stream).
+    pub(crate) fn submit(
+        &self,
+        ws: &mut Option<GpuWorkspace>,
+        image: GrayView<'_>,
+        mask: Option<GrayView<'_>>,
+    ) -> Result<(Ticket, wgpu::SubmissionIndex)> {
         image.check()?;
         self.ctx.check_lost_polled()?;
         self.prepare_workspace(ws, image.width(), image.height())?;
@@ -333,12 +347,12 @@ impl GpuDetector {
         let mut enc = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lfast") });
         self.encode(&mut enc, GpuInput::Written, ws)?;
         let t = self.encode_readback(&mut enc, ws)?;
-        self.ctx.queue.submit([enc.finish()]);
+        let index = self.ctx.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu { reason: e.to_string() });
         }
         self.start_readback(ws, t)?;
-        self.finish_readback(ws, t)
+        Ok((t, index))
     }
 
     /// Runs SPEC 0-7 and reads back the edge map E of level 0 (255 = edge).
