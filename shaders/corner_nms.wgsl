@@ -7,7 +7,8 @@
 // Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/corner_nms.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
 // Races: each survivor takes its own slot of `corners` with an atomicAdd on
-// counters[CORNERS] (slots past the capacity are not written); resp is only read.
+// counters[CORNERS] (slots past the capacity are not written); resp is only read,
+// and only at candidates (`cand` bits): response.wgsl writes those words only.
 
 @group(0) @binding(1) var<storage, read> cand: array<u32>;
 @group(0) @binding(2) var<storage, read> cand_list: array<u32>;

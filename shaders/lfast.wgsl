@@ -1,7 +1,8 @@
 // SPEC 8: the L-FAST corner test on the edge map (paper 3.2, Steps 1-5).
 // Mirrors src/cpu/lfast.rs. `edges` (+ `mask` when P.use_mask == 1) ->
 // `cand` (1 = candidate, 0 otherwise; column-packed, common.wgsl pk_word;
-// zeroed by `windows`: it shares its memory with `classes`, src/gpu/footprint.rs),
+// zeroed right before the pass, src/gpu/lfast.rs: it shares its memory with
+// `classes`, src/gpu/footprint.rs),
 // and the candidate list: every candidate's
 // atlas index appended to `cand_list` in no particular order, counted in
 // counters[CANDS], and the indirect args over it (entry `cand_args`), which
@@ -11,8 +12,8 @@
 // itself runs on the workgroup's compacted edge pixels (see main).
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/lfast.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
-// Races: windows stores edge_bits[tile_word(l, x, tile)] and zeroes the `cand`
-// words of column x of that tile from the invocation of column x only, and its edge-list entries into the range its
+// Races: windows stores edge_bits[tile_word(l, x, tile)] from the invocation
+// of column x only, and its edge-list entries into the range its
 // workgroup reserved (one atomicAdd on counters[EDGES] by lane 0, lanes' offsets
 // from an atomicAdd on the workgroup's count); main sets candidate bits with
 // atomicOr (several pixels share a word of `cand`) and takes its cand_list slot
@@ -174,10 +175,7 @@ fn window_nibble(top: u32, last: u32, l: u32, g: i32, k: i32, h: u32) -> u32 {
 fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = quad_span(wg, li);
     var rows = vec2<u32>(0u);
-    if (span.y < span.z) {
-        clear_cand(span);
-        rows = walk_windows(span);
-    }
+    if (span.y < span.z) { rows = walk_windows(span); }
     // The tested rows' list entries, reserved once per workgroup: an atomic
     // per entry on the one counter (tens of thousands a KITTI frame, its
     // cache line bouncing between the cores) cost lavapipe ~0.2 ms more.
@@ -203,19 +201,6 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
         r &= r - 1u;
         edge_list[at] = base + (k & 15u) * w + 2u + (k >> 4u);
         at++;
-    }
-}
-
-// Zeroes the words of `cand` of the quad walk `span` (quad_span), before
-// `main` sets the candidates' bytes: the walks of the tile list cover every
-// word of every level once.
-fn clear_cand(span: vec4<u32>) {
-    let l = span.w;
-    let end = min(span.x + 4u, lw(l));
-    for (var x = span.x; x < end; x++) {
-        for (var y = span.y; y < span.z; y += 4u) {
-            atomicStore(&cand[pk_word(l, x, y)], 0u);
-        }
     }
 }
 
@@ -287,8 +272,8 @@ fn args() {
 // Entry `main`, work-efficient: one invocation per listed edge pixel, by
 // indirect dispatch over the edge list, so the test runs in as few SIMD lanes
 // / warps as there are edge pixels and nothing scans the levels' pixels. A
-// corner sets its byte of `cand` (column-packed, cleared by the pass's
-// prepare) with an atomic OR (other pixels of its word may be corners too)
+// corner sets its byte of `cand` (column-packed, zeroed right before the
+// pass) with an atomic OR (other pixels of its word may be corners too)
 // and appends its index to `cand_list`: the candidates are few (a few
 // thousand per KITTI frame), and a dense scan of `cand` to list them cost
 // lavapipe ~0.8 ms per KITTI frame.

@@ -1,10 +1,11 @@
 // SPEC 9: Harris corner response on D (7x7 block, 3x3 Sobel, k = 0.04), as
 // OpenCV ORB's HARRIS_SCORE. Mirrors src/cpu/response.rs.
 // The candidate list (`cand_list`, atlas indices; cand_list.wgsl) + `denoised` -> `resp` (f32 bits) at
-// candidates, 0 elsewhere. Two dispatches: `clear` zeroes `resp` (it shares its
-// memory with `labels` and `edge_list`, which earlier stages of the frame
-// used: src/gpu/footprint.rs), then `main`, one invocation per candidate, all
-// levels in one indirect dispatch over the list.
+// the candidates, one invocation per candidate, all levels in one indirect
+// dispatch over the list. The other words of `resp` are left as they were
+// (it shares its memory with `labels` and `edge_list`, which earlier stages
+// of the frame used: src/gpu/footprint.rs): corner_nms.wgsl, the only
+// reader, reads candidates' responses only (src/gpu/response.rs).
 //
 // Bit-identical to the CPU: the structure sums are exact integers, and the
 // final formula (harris_from_sums) is f32 in the CPU's operation order, with
@@ -173,21 +174,6 @@ fn structure_sums(l: u32, x: i32, y: i32) -> vec3<i32> {
 // Work-efficient: an indirect dispatch over the candidate list, one
 // invocation per candidate (cand_list.wgsl lists them, for this pass and
 // corner NMS), so nothing scans the levels' pixels here.
-// Eight words per invocation, CLEAR_GROUP words per workgroup (eight rounds
-// of 256 consecutive words), the workgroups in rows of P.tile_row
-// (FrameLayout::word_groups). One word per invocation had taken 1.4 ms of a
-// KITTI frame on lavapipe (5,700 workgroups), most of this pass.
-const CLEAR_GROUP: u32 = 2048u;
-
-@compute @workgroup_size(256, 1, 1)
-fn clear(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let base = (wg.x + wg.y * P.tile_row) * CLEAR_GROUP + li;
-    for (var k = 0u; k < CLEAR_GROUP; k += 256u) {
-        let i = base + k;
-        if (i < P.total_px) { resp[i] = 0u; }
-    }
-}
-
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let k = list_index(wg, li);

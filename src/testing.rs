@@ -146,6 +146,9 @@ pub fn run<P: Pass>(ctx: &GpuContext, pass: &P, b: &Buffers) -> Result<()> {
     let bound = pass.bind(&ctx.device, b)?;
     let mut enc = ctx.device.create_command_encoder(&Default::default());
     pass.prepare(&mut enc, b);
+    if let Some(buf) = pass.clear_before(b) {
+        enc.clear_buffer(buf, 0, None);
+    }
     {
         let mut cp =
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(P::NAME), timestamp_writes: None });

@@ -178,7 +178,8 @@ fn check_lfast(
     let mut p = b.layout.params;
     p.use_mask = masks.is_some() as u32;
     ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
-    // every byte 1: a word lfast skips shows as candidates
+    // every byte 1 (what `classes` leaves in the same memory): a word the
+    // pass does not clear shows as candidates
     poison(ctx, &b.cand, 0x0101_0101);
     // every bit an edge: a window the `windows` dispatch leaves unwritten
     // shows as edges around the pixels that read it

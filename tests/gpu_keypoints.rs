@@ -125,13 +125,15 @@ fn response_matches_cpu_on_real_candidates() {
             t::upload_packed(&ctx, &b, &b.denoised, l, &lv.denoised);
             t::upload_packed(&ctx, &b, &b.cand, l, &cand_map(lv.denoised.width, lv.denoised.height, &lv.cands));
         }
-        // stale responses: the pass must leave 0 at every pixel that is no candidate
-        t::upload(&ctx, &b.resp, &vec![0xdead_beefu32; (b.resp.size() / 4) as usize]);
+        // stale words (what labels and edge_list, the same memory, leave): the pass
+        // writes every candidate's word and no other
+        const STALE: u32 = 0xdead_beef;
+        t::upload(&ctx, &b.resp, &vec![STALE; (b.resp.size() / 4) as usize]);
         t::run(&ctx, &list, &b).unwrap();
         t::run(&ctx, &pass, &b).unwrap();
         for (l, lv) in levels.iter().enumerate() {
             let w = lv.denoised.width;
-            let mut want = vec![0u32; lv.denoised.len()];
+            let mut want = vec![STALE; lv.denoised.len()];
             for (&[x, y], r) in lv.cands.iter().zip(&lv.resp) {
                 want[(y * w + x) as usize] = r.to_bits();
             }

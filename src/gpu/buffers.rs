@@ -416,10 +416,11 @@ impl Buffers {
         // allocation (footprint::Sizes::allocations lists them): M8
         // (gradient_nms to classify) and the smoothed levels (blur to orb); the union-find labels
         // (hysteresis), the L-FAST edge list (lfast), the responses (response
-        // to snap; the response pass zeroes them itself) and select's records;
+        // to corner NMS, which reads the candidates' words only, the words
+        // the response pass writes) and select's records;
         // the candidate list (lfast to snap) and select's buckets' members;
         // the classes (classify to rules) and the L-FAST candidates (lfast to
-        // corner NMS; lfast's `windows` zeroes them); the windows' histograms
+        // corner NMS; cleared right before lfast, Pass::clear_before); the windows' histograms
         // (local_threshold, which zeroes them before the frame) and the corners
         // (corner NMS to select).
         let m_smooth = packed(SHARED_PACKED);

@@ -262,12 +262,6 @@ impl FrameLayout {
         self.in_rows(self.params.total_tiles.div_ceil(QUAD_TILES))
     }
 
-    /// Workgroups of a pass over `words` words of a buffer, `per_group` per
-    /// workgroup, in rows of at most `tile_row` workgroups (shaders/response.wgsl `clear`).
-    pub fn word_groups(&self, words: u32, per_group: u32) -> [u32; 3] {
-        self.in_rows(words.div_ceil(per_group.max(1)))
-    }
-
     /// `n` workgroups in rows of at most `tile_row` (the device's per-dimension limit).
     fn in_rows(&self, n: u32) -> [u32; 3] {
         let row = self.params.tile_row.max(1);

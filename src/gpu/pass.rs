@@ -18,6 +18,15 @@ pub trait Pass: Sized {
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &Self::Bound, b: &Buffers);
     /// Commands that must precede the compute pass (clearing counters), recorded on the encoder.
     fn prepare(&self, _encoder: &mut wgpu::CommandEncoder, _b: &Buffers) {}
+    /// A buffer the stage needs zeroed that shares its memory with an
+    /// earlier stage's (src/gpu/footprint.rs), so [`prepare`](Self::prepare),
+    /// whose commands may all come before the frame's first stage, cannot
+    /// clear it: it is cleared right before the stage's dispatches, between
+    /// two compute passes (a fill of the buffer, where a shader's stores
+    /// cost lavapipe a per-lane loop each).
+    fn clear_before<'b>(&self, _b: &'b Buffers) -> Option<&'b wgpu::Buffer> {
+        None
+    }
 }
 
 /// How a `simple_pass!` stage is dispatched.

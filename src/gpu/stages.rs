@@ -80,13 +80,18 @@ macro_rules! stages {
                     // touches: counters, hist, flags), then every stage as
                     // dispatches of one compute pass. wgpu orders them and puts
                     // the barriers between them; a pass per stage would add its
-                    // begin/end on the CPU and the GPU.
+                    // begin/end on the CPU and the GPU. The pass is split only
+                    // where a stage's `clear_before` clears a buffer whose
+                    // memory an earlier stage used.
                     $(self.$m.prepare(enc, b);)*
-                    let mut cp = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some("lfast"),
-                        timestamp_writes: None,
-                    });
+                    let desc = wgpu::ComputePassDescriptor { label: Some("lfast"), timestamp_writes: None };
+                    let mut cp = enc.begin_compute_pass(&desc).forget_lifetime();
                     $(
+                        if let Some(buf) = self.$m.clear_before(b) {
+                            drop(cp);
+                            enc.clear_buffer(buf, 0, None);
+                            cp = enc.begin_compute_pass(&desc).forget_lifetime();
+                        }
                         if !special(stringify!($m), &mut cp) {
                             self.$m.record(&mut cp, &bound.$m, b);
                         }
@@ -96,6 +101,9 @@ macro_rules! stages {
                 let mut stage = 0;
                 $(
                     self.$m.prepare(enc, b);
+                    if let Some(buf) = self.$m.clear_before(b) {
+                        enc.clear_buffer(buf, 0, None);
+                    }
                     {
                         let mut cp = begin_pass(enc, ts, stage);
                         if !special(stringify!($m), &mut cp) {
