@@ -90,18 +90,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let view = tex.create_view(&Default::default());
     for (ty, n) in [("u32", 1), ("vec2<u32>", 2), ("vec4<u32>", 4), ("texture", 1)] {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: None,
-            source: wgpu::ShaderSource::Wgsl(source(ty, n).into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: None,
-            layout: None,
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = compile(device, &source(ty, n));
         let input = if ty == "texture" { wgpu::BindingResource::TextureView(&view) } else { src.as_entire_binding() };
         let bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
@@ -192,23 +181,29 @@ fn op_costs(ctx: &GpuContext) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-fn op_pipeline(
-    device: &wgpu::Device,
-    src: &str,
-    buffers: &[wgpu::Buffer; 3],
-) -> (wgpu::ComputePipeline, wgpu::BindGroup) {
+/// The pipeline of `src`'s entry point `main` (its layout from the shader).
+fn compile(device: &wgpu::Device, src: &str) -> wgpu::ComputePipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: None,
         source: wgpu::ShaderSource::Wgsl(src.into()),
     });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: None,
         layout: None,
         module: &module,
         entry_point: Some("main"),
         compilation_options: Default::default(),
         cache: None,
-    });
+    })
+}
+
+/// The pipeline of [`OPS`] with one operation, and its bind group.
+fn op_pipeline(
+    device: &wgpu::Device,
+    src: &str,
+    buffers: &[wgpu::Buffer; 3],
+) -> (wgpu::ComputePipeline, wgpu::BindGroup) {
+    let pipeline = compile(device, src);
     let layout = pipeline.get_bind_group_layout(0);
     // every shader uses the three buffers (the final line reads them all)
     let entries: Vec<wgpu::BindGroupEntry> = (0..3u32)
