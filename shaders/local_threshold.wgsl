@@ -112,8 +112,8 @@ var<workgroup> planes: array<vec4<u32>, 16>;
 // the workgroup's lanes' counters in `planes`: bits li + 8 j of a lane's
 // planes are those bins' counts (< 256) as bits, which shifted into bytes j
 // of one word give all four counts at once; bytes 0, 2 and 1, 3 are summed
-// in 16-bit halves (eight lanes' counts < 2048). The loads are the same for
-// every lane (one scalar load each on lavapipe).
+// in 16-bit halves (eight lanes' counts < 2048). Every lane loads the same
+// 16 words.
 fn small_counts(li: u32) -> vec4<u32> {
     var even = 0u;
     var odd = 0u;
@@ -234,9 +234,9 @@ fn cells(
         full &= full - 1u;
         let c = atomicLoad(&bins[k]) + select(0u, small[min(j, 3u)], j < 4u);
         atomicAdd(&hist[l * 256u + k], c);
-        for (var j = r.z; j < r.w; j++) {
-            for (var i = r.x; i < r.y; i++) {
-                atomicAdd(&window_hist[(P.levels[l].w + j * g.x + i) * 256u + k], c);
+        for (var iy = r.z; iy < r.w; iy++) {
+            for (var ix = r.x; ix < r.y; ix++) {
+                atomicAdd(&window_hist[(P.levels[l].w + iy * g.x + ix) * 256u + k], c);
             }
         }
     }
