@@ -46,7 +46,7 @@ pub use footprint::{WorkspaceReport, workspace_report};
 pub use layout::FrameLayout;
 pub use pass::Pass;
 pub use readback::{Frame, Ticket};
-pub use stages::{SHADERS, STAGES};
+pub use stages::{SHADERS, STAGES, time_each_stage};
 
 use kernel::Binding;
 

@@ -26,6 +26,20 @@ macro_rules! stages {
             $(ShaderInfo { name: stringify!($x), source: super::$x::SOURCE, bindings: super::$x::BINDINGS },)*
         ];
 
+        /// Builds each stage's pipelines as a detector does, one stage after
+        /// another on the calling thread, and calls `each(stage, seconds)`
+        /// after each: what each stage adds to a detector's start
+        /// (examples/compile_times.rs). Validation errors go to the device's
+        /// error handler, as for any pipeline built outside an error scope.
+        pub fn time_each_stage(device: &wgpu::Device, mut each: impl FnMut(&'static str, f64)) {
+            $(
+                let t = std::time::Instant::now();
+                let built = <super::$m::$ty as Pass>::new(device);
+                each(stringify!($m), t.elapsed().as_secs_f64());
+                drop(built);
+            )*
+        }
+
         /// Every stage's pipelines, built once per device.
         #[derive(Debug)]
         pub(crate) struct Passes {
