@@ -233,11 +233,17 @@ fn six_select(b: Six, a: Six, yes: bool) -> Six {
 }
 
 // Column-packed 8-bit planes (`classes`, `ruled`; FrameLayout::packed_offsets,
-// gpu::layout::pack_level): word (y / 4) * w + x of level l holds rows
+// gpu::layout::pack_level): word (y / 4) * pk_pitch(l) + x of level l holds rows
 // 4 (y / 4) .. + 4 of column x, row y in bits 8 (y % 4) .. + 8. A column walk
 // reads or writes a word per four rows (a tile's 16 rows are 4 whole words, so
 // no two invocations write one word). Rows past the level's last are 0.
-fn pk_word(l: u32, x: u32, y: u32) -> u32 { return P.tiles[l].w + (y >> 2u) * lw(l) + x; }
+fn pk_word(l: u32, x: u32, y: u32) -> u32 { return P.tiles[l].w + (y >> 2u) * pk_pitch(l) + x; }
+// Words from a row of words of level l to the next: its width rounded up to
+// a multiple of 4 (gpu::layout::packed_pitch), so that a quad walk's four
+// columns x0 .. x0 + 3 are one aligned vec4 (level offsets are multiples of
+// 4 too). The words past the width hold no pixel: a pass may store anything
+// there, and walks clamp the columns they read into the level.
+fn pk_pitch(l: u32) -> u32 { return (lw(l) + 3u) & ~3u; }
 fn pk_byte(word: u32, y: u32) -> u32 { return (word >> ((y & 3u) * 8u)) & 0xffu; }
 // Row y's value v in its place of a word being built (OR the four rows together).
 fn pk_place(v: u32, y: u32) -> u32 { return v << ((y & 3u) * 8u); }

@@ -62,14 +62,19 @@
 // (atomicMin, atomicStore, atomicOr: the union-find above, whose roots
 // come out the same in any interleaving);
 // walk_args, a single invocation, stores `indirect` and pads `walks`;
-// final_edges stores the `edges` words of its walk's four columns (4 whole
-// words per column of a tile, common.wgsl pk_word), and walks are distinct
+// final_edges stores the `edges` words of its walk's four columns, padding
+// past the level's width included (4 whole words per column of a tile,
+// common.wgsl pk_word), and walks are distinct
 // entries, so no two invocations write one word.
 
 @group(0) @binding(1) var<storage, read> ruled: array<u32>;
+// `ruled` again, four columns' words a load (a quad walk's x0 .. x0 + 3: x0
+// is a multiple of 4 and a tile row's words start at a multiple of 16)
+@group(0) @binding(8) var<storage, read> ruled4: array<vec4<u32>>;
 @group(0) @binding(2) var<storage, read_write> labels: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> flags: array<atomic<u32>>;
-@group(0) @binding(4) var<storage, read_write> edges: array<u32>;
+// four columns' words a store (common.wgsl pk_pitch), padding included
+@group(0) @binding(4) var<storage, read_write> edges: array<vec4<u32>>;
 // The quad walks holding an active pixel (common.wgsl walk_entry), appended
 // by rules.wgsl and counted in counters[WALKS]; walk_args pads them to a
 // whole workgroup with NO_WALK and writes the steps' indirect args.
@@ -162,8 +167,11 @@ fn link(i: u32, t: u32) {
 // active). Six unconditional loads (columns clamped), then zeroed outside.
 fn six_active(l: u32, cols: Six, inside: Six, ty: u32) -> Six {
     let t = (P.tiles[l].x + ty * P.tiles[l].y) * TILE;
-    let a = vec4<u32>(ruled[t + tile_col(cols.a.x)], ruled[t + tile_col(cols.a.y)], ruled[t + tile_col(cols.a.z)], ruled[t + tile_col(cols.a.w)]);
-    let b = vec2<u32>(ruled[t + tile_col(cols.b.x)], ruled[t + tile_col(cols.b.y)]);
+    // columns x0 .. x0 + 3 (cols.a.y: x0) in one load: past the level's
+    // right edge they are padding, zeroed below
+    let mid = ruled4[(t + cols.a.y) >> 2u];
+    let a = vec4<u32>(ruled[t + tile_col(cols.a.x)], mid.xyz);
+    let b = vec2<u32>(mid.w, ruled[t + tile_col(cols.b.y)]);
     return Six(a & inside.a & vec4<u32>(0xffffu), b & inside.b & vec2<u32>(0xffffu));
 }
 
@@ -317,13 +325,6 @@ fn compress_px(i: u32, strong: bool) {
     if (strong) { atomicOr(&flags[root >> 5u], 1u << (root & 31u)); }
 }
 
-// Bits of the walk's rows (bit r = row y0 + r; rows past the level's last
-// clear): which are active (.x) and which STRONG (.y), its `ruled` word.
-fn active_rows(l: u32, x: u32, y0: u32) -> vec2<u32> {
-    let word = ruled[tile_word(l, x, y0 / TILE)];
-    return vec2<u32>(word & 0xffffu, word >> 16u);
-}
-
 // The rows of the vertical run of active rows `act` that starts at row r0.
 fn run_mask(act: u32, r0: u32) -> u32 {
     return ((1u << countTrailingZeros(~(act >> r0))) - 1u) << r0;
@@ -364,15 +365,18 @@ fn compress_pair(a: vec2<u32>, b: vec2<u32>, i0: u32, w: u32) {
     }
 }
 
-// active_rows of columns x0 .. x0 + 3 (a column past the level's right edge
-// has none).
+// The walk's rows of columns x0 .. x0 + 3 (bit r = row y0 + r; rows past the
+// level's last clear): which are active (.x) and which STRONG (.y), from
+// their `ruled` words (a column past the level's right edge has none).
 fn quad_rows(l: u32, x0: u32, w: u32, y0: u32) -> array<vec2<u32>, 4> {
-    let xm = w - 1u;
+    // the four columns' words in one load; those past the level (padding) read as none
+    let inside = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u) < vec4<u32>(w);
+    let words = select(vec4<u32>(0u), ruled4[tile_word(l, x0, y0 / TILE) >> 2u], inside);
     return array<vec2<u32>, 4>(
-        active_rows(l, x0, y0),
-        select(vec2<u32>(0u), active_rows(l, min(x0 + 1u, xm), y0), x0 + 1u < w),
-        select(vec2<u32>(0u), active_rows(l, min(x0 + 2u, xm), y0), x0 + 2u < w),
-        select(vec2<u32>(0u), active_rows(l, min(x0 + 3u, xm), y0), x0 + 3u < w),
+        vec2<u32>(words.x & 0xffffu, words.x >> 16u),
+        vec2<u32>(words.y & 0xffffu, words.y >> 16u),
+        vec2<u32>(words.z & 0xffffu, words.z >> 16u),
+        vec2<u32>(words.w & 0xffffu, words.w >> 16u),
     );
 }
 
@@ -416,12 +420,11 @@ fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_i
     let e23 = edge_pair(m[2].x, m[3].x, row0 + 2u, w);
     // `edges` is column-packed as `ruled`: bit r of column k's edge rows ->
     // 255 at row c.y + r. The walk's words in a loop (see median.wgsl).
+    // (columns past the level's width have no edge rows: their padding words 0)
     for (var y = c.y; y < c.z; y += 4u) {
         let s = y - c.y;
-        let i = pk_word(l, x0, y);
-        edges[i] = pk_from_bits(e01 >> s) * EDGE;
-        if (x0 + 1u < w) { edges[i + 1u] = pk_from_bits(e01 >> (16u + s)) * EDGE; }
-        if (x0 + 2u < w) { edges[i + 2u] = pk_from_bits(e23 >> s) * EDGE; }
-        if (x0 + 3u < w) { edges[i + 3u] = pk_from_bits(e23 >> (16u + s)) * EDGE; }
+        let q = vec4<u32>(e01 >> s, e01 >> (16u + s), e23 >> s, e23 >> (16u + s));
+        edges[pk_word(l, x0, y) >> 2u] = vec4<u32>(
+            pk_from_bits(q.x), pk_from_bits(q.y), pk_from_bits(q.z), pk_from_bits(q.w)) * vec4<u32>(EDGE);
     }
 }

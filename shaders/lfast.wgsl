@@ -12,8 +12,9 @@
 // itself runs on the workgroup's compacted edge pixels (see main).
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/lfast.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
-// Races: windows stores edge_bits[tile_word(l, x, tile)] from the invocation
-// of column x only, and its edge-list entries into the range its
+// Races: windows stores the edge_bits words (tile_word) of its quad's four
+// columns (padding past the level's width included) from that quad's
+// invocation only, and its edge-list entries into the range its
 // workgroup reserved (one atomicAdd on counters[EDGES] by lane 0, lanes' offsets
 // from an atomicAdd on the workgroup's count); main sets candidate bits with
 // atomicOr (several pixels share a word of `cand`) and takes its cand_list slot
@@ -27,6 +28,10 @@
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> cand_list: array<u32>;
 @group(0) @binding(8) var<storage, read_write> indirect: array<u32>;
+// `edges` and `edge_bits` again, four columns' words a load or store (a quad
+// walk's x0 .. x0 + 3: common.wgsl pk_pitch, tile_word), for `windows`
+@group(0) @binding(9) var<storage, read> edges4: array<vec4<u32>>;
+@group(0) @binding(10) var<storage, read_write> edge_bits4: array<vec4<u32>>;
 
 // indirect::EDGES / 4 and indirect::CANDS / 4 in src/gpu/buffers.rs.
 const I_EDGES: u32 = 20u;
@@ -150,13 +155,16 @@ fn is_corner(l: u32, px: i32, py: i32) -> bool {
     return k > 2u || (k == 2u && !straight_pair(ts));
 }
 
-// Bits 4k .. 4k + 3 of an edge window: the edge rows of packed word g + k of
-// the column (words top ..= last), 0 outside the level.
-fn window_nibble(top: u32, last: u32, l: u32, g: i32, k: i32, h: u32) -> u32 {
+// Bits 4k .. 4k + 3 of the edge windows of columns x0 .. x0 + 3: the edge
+// rows of their packed words of group g + k (one aligned load, the group
+// clamped into the level), 0 outside the level.
+fn window_nibbles(l: u32, x0: u32, g: i32, k: i32, h: u32) -> vec4<u32> {
     let i = g + k;
     let inside = i >= 0 && u32(i) * 4u < h;
-    let word = edges[min(top + u32(max(i, 0)) * lw(l), last)];
-    return select(0u, bits4(pk_rows(word) == vec4<u32>(EDGE)) << (4u * u32(k)), inside);
+    let words = edges4[pk_word(l, x0, 4u * min(u32(max(i, 0)), (h - 1u) >> 2u)) >> 2u];
+    let e = vec4<u32>(EDGE);
+    let n = vec4<u32>(bits4(pk_rows(words.x) == e), bits4(pk_rows(words.y) == e), bits4(pk_rows(words.z) == e), bits4(pk_rows(words.w) == e));
+    return select(vec4<u32>(0u), n << vec4<u32>(4u * u32(k)), inside);
 }
 
 // Entry `windows`, the pass's first dispatch: a column pass whose invocation
@@ -223,35 +231,24 @@ fn walk_windows(span: vec4<u32>) -> vec2<u32> {
     let lo = u32(clamp(i32(b) - i32(span.y), 0, 16));
     let hi = u32(clamp(i32(h) - i32(b) - i32(span.y), 0, 16));
     let tested = select(0u, ((1u << hi) - 1u) & ~((1u << lo) - 1u), hi > lo);
-    let r0 = column_window(l, x0, span.y, w, h, b, tested);
-    let r1 = column_window(l, x0 + 1u, span.y, w, h, b, tested);
-    let r2 = column_window(l, x0 + 2u, span.y, w, h, b, tested);
-    let r3 = column_window(l, x0 + 3u, span.y, w, h, b, tested);
-    return vec2<u32>(r0 | (r1 << 16u), r2 | (r3 << 16u));
-}
-
-// Column x's edge window of the tile row of y0 (stored to `edge_bits` when x
-// is inside the level) and its tested edge rows (bit r: row y0 + r; `tested`
-// the rows the level's border leaves, b the border).
-fn column_window(l: u32, x: u32, y0: u32, w: u32, h: u32, b: u32, tested: u32) -> u32 {
-    // rows r - 8 .. r - 5, r = y0 + 4k: a whole packed word, or none of the
-    // level; the eight loads unconditional (clamped into the level), the
-    // words outside it dropped
-    let xc = min(x, w - 1u);
-    let top = pk_word(l, xc, 0u);
-    let last = pk_word(l, xc, h - 1u);
-    let g = i32(y0 >> 2u) - 2;
-    var bits = 0u;
-    bits |= window_nibble(top, last, l, g, 0, h);
-    bits |= window_nibble(top, last, l, g, 1, h);
-    bits |= window_nibble(top, last, l, g, 2, h);
-    bits |= window_nibble(top, last, l, g, 3, h);
-    bits |= window_nibble(top, last, l, g, 4, h);
-    bits |= window_nibble(top, last, l, g, 5, h);
-    bits |= window_nibble(top, last, l, g, 6, h);
-    bits |= window_nibble(top, last, l, g, 7, h);
-    if (x < w) { edge_bits[tile_word(l, x, y0 / TILE)] = bits; }
-    return select(0u, (bits >> 8u) & tested, x >= b && x + b < w);
+    // rows y0 - 8 .. y0 + 23 of the four columns: eight groups of four rows
+    // (y0, a multiple of 16, is its tile's top row), a load each for all four
+    let g = i32(span.y >> 2u) - 2;
+    var bits = window_nibbles(l, x0, g, 0, h);
+    bits |= window_nibbles(l, x0, g, 1, h);
+    bits |= window_nibbles(l, x0, g, 2, h);
+    bits |= window_nibbles(l, x0, g, 3, h);
+    bits |= window_nibbles(l, x0, g, 4, h);
+    bits |= window_nibbles(l, x0, g, 5, h);
+    bits |= window_nibbles(l, x0, g, 6, h);
+    bits |= window_nibbles(l, x0, g, 7, h);
+    // the four columns' windows, stored (columns past the level's width are
+    // padding words of the tile row, never read), and their tested edge rows
+    // (bit r: row y0 + r; `tested` the rows the level's border leaves)
+    edge_bits4[tile_word(l, x0, span.y / TILE) >> 2u] = bits;
+    let x = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
+    let r = select(vec4<u32>(0u), (bits >> vec4<u32>(8u)) & vec4<u32>(tested), (x >= vec4<u32>(b)) & (x + vec4<u32>(b) < vec4<u32>(w)));
+    return vec2<u32>(r.x | (r.y << 16u), r.z | (r.w << 16u));
 }
 
 // The indirect args over the list counted in counters[c] into indirect[i ..

@@ -6,8 +6,9 @@
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/pyramid.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
 // Races: no atomics. Invocation (id.x, wg.y) stores only the `gray` words of
-// level l's columns 4 id.x .. 4 id.x + 3 at rows 16 wg.y .. + 15: 4 whole words
-// per column (common.wgsl pk_word), disjoint across invocations; it reads level
+// level l's columns 4 id.x .. 4 id.x + 3 at rows 16 wg.y .. + 15 (the padding
+// words past the level's width included): 4 whole words per column
+// (common.wgsl pk_word), disjoint across invocations; it reads level
 // l - 1 only, which this dispatch does not write.
 
 const COEF_BITS: u32 = 11u;
@@ -15,6 +16,9 @@ const ONE: u32 = 2048u; // 1 << COEF_BITS
 
 @group(0) @binding(1) var<uniform> level_index: vec4<u32>;
 @group(0) @binding(2) var<storage, read_write> gray: array<u32>;
+// `gray` again, four columns' words a store (common.wgsl pk_pitch; the
+// padding words past the level's width included)
+@group(0) @binding(3) var<storage, read_write> gray4: array<vec4<u32>>;
 
 // Source index and Q11 weight of the right/lower neighbour for destination
 // index d when resizing src_len -> dst_len, exactly as cpu::pyramid::tap:
@@ -68,11 +72,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg:
     b.cg = 0xffffffffu;
     for (var y = y0; y < c.end; y += 4u) {
         let words = row_value(&b, c, y) | row_value(&b, c, y + 1u) | row_value(&b, c, y + 2u) | row_value(&b, c, y + 3u);
-        let i = pk_word(l, x0, y);
-        gray[i] = words.x;
-        if (x0 + 1u < dw) { gray[i + 1u] = words.y; }
-        if (x0 + 2u < dw) { gray[i + 2u] = words.z; }
-        if (x0 + 3u < dw) { gray[i + 3u] = words.w; }
+        gray4[pk_word(l, x0, y) >> 2u] = words;
     }
 }
 

@@ -96,8 +96,8 @@ fn col9(l: u32, x: i32, y: i32) -> Col9 {
     let base = pk_word(l, cx, top);
     let last = pk_word(l, cx, u32(hm));
     let w0 = denoised[base];
-    let w1 = denoised[min(base + lw(l), last)];
-    let w2 = denoised[min(base + 2u * lw(l), last)];
+    let w1 = denoised[min(base + pk_pitch(l), last)];
+    let w2 = denoised[min(base + 2u * pk_pitch(l), last)];
     let g = top >> 2u;
     return Col9(
         vec3(d_row(w0, w1, w2, g, y - 4, hm), d_row(w0, w1, w2, g, y - 3, hm), d_row(w0, w1, w2, g, y - 2, hm)),

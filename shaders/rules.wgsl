@@ -17,7 +17,11 @@
 // workgroup's count, wg_base read after a barrier).
 
 @group(0) @binding(1) var<storage, read> classes: array<u32>;
-@group(0) @binding(2) var<storage, read_write> ruled: array<u32>;
+// `classes` again, four columns' words a load (common.wgsl pk_pitch)
+@group(0) @binding(5) var<storage, read> classes4: array<vec4<u32>>;
+// four columns' words a store (a tile row's words start at a multiple of 16;
+// the columns past the level's width are padding, which no pass reads as a pixel)
+@group(0) @binding(2) var<storage, read_write> ruled: array<vec4<u32>>;
 @group(0) @binding(3) var<storage, read_write> walks: array<u32>;
 @group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
 
@@ -38,15 +42,15 @@ const STRONG: u32 = 4u;
 // here: a missing neighbour matches no searched class, as rule_at only looks
 // for WEAK_STRONG and WEAK_WEAK; rows past the last of a word are NONE too).
 fn six_words(l: u32, cols: Six, inside: Six, y: i32) -> Six {
-    // the six loads unconditional (clamped row and columns), then zeroed
-    // outside the level
+    // the loads unconditional (clamped row and columns; columns x0 .. x0 + 3,
+    // x0 = cols.a.y, one aligned load), then zeroed outside the level
     let h = i32(lh(l));
     let r = pk_word(l, 0u, u32(clamp(y, 0, h - 1)));
     let row = select(0u, 0xffffffffu, y >= 0 && y < h);
+    let mid = classes4[(r + cols.a.y) >> 2u];
     return Six(
-        vec4<u32>(classes[r + cols.a.x], classes[r + cols.a.y], classes[r + cols.a.z], classes[r + cols.a.w])
-            & inside.a & vec4<u32>(row),
-        vec2<u32>(classes[r + cols.b.x], classes[r + cols.b.y]) & inside.b & vec2<u32>(row),
+        vec4<u32>(classes[r + cols.a.x], mid.xyz) & inside.a & vec4<u32>(row),
+        vec2<u32>(mid.w, classes[r + cols.b.y]) & inside.b & vec2<u32>(row),
     );
 }
 
@@ -129,11 +133,7 @@ fn rule_walk(span: vec4<u32>, real: bool) -> bool {
     for (var y = y0; y < end; y += 4) {
         bits |= step(&a, &b, &cur, l, cols, inside, y, y0, end);
     }
-    let i = tile_word(l, x0, span.y / TILE);
-    if (real) { ruled[i] = bits.x; }
-    if (real && x0 + 1u < w) { ruled[i + 1u] = bits.y; }
-    if (real && x0 + 2u < w) { ruled[i + 2u] = bits.z; }
-    if (real && x0 + 3u < w) { ruled[i + 3u] = bits.w; }
+    if (real) { ruled[tile_word(l, x0, span.y / TILE) >> 2u] = bits; }
     return real && ((bits.x | bits.y | bits.z | bits.w) & 0xffffu) != 0u;
 }
 

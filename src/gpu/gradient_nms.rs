@@ -10,13 +10,19 @@ use super::pass::{Groups, simple_pass};
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/gradient_nms.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] =
-    &[PARAMS, b(1, "denoised", Slot::Read), b(2, "m", Slot::ReadWrite), b(3, "nms", Slot::ReadWrite)];
+pub const BINDINGS: &[Binding] = &[
+    PARAMS,
+    b(1, "denoised", Slot::Read),
+    b(2, "m", Slot::ReadWrite),
+    b(3, "nms", Slot::ReadWrite),
+    b(4, "denoised4", Slot::Read),
+];
 
 simple_pass! {
     /// The fused gradient and NMS pass.
     GradientNmsPass = "gradient_nms" {
         "denoised" = denoised,
+        "denoised4" = denoised,
         "m" = m,
         "nms" = nms,
     }

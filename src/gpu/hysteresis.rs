@@ -22,13 +22,15 @@ pub const BINDINGS: &[Binding] = &[
     b(5, "walks", Slot::ReadWrite),
     b(6, "counters", Slot::ReadWrite),
     b(7, "indirect", Slot::ReadWrite),
+    b(8, "ruled4", Slot::Read),
 ];
 /// `walk_args`'s: it writes the args the three steps are dispatched by, so
 /// those must not bind `indirect` (a buffer is either indirect args or
 /// storage within one dispatch).
 const ARGS_BINDINGS: &[Binding] = &[PARAMS, BINDINGS[5], BINDINGS[6], BINDINGS[7]];
 /// The three steps'.
-const STEP_BINDINGS: &[Binding] = BINDINGS.split_at(6).0;
+const STEP_BINDINGS: &[Binding] =
+    &[BINDINGS[0], BINDINGS[1], BINDINGS[2], BINDINGS[3], BINDINGS[4], BINDINGS[5], BINDINGS[8]];
 
 /// The entry points in dispatch order, with their bindings: the walk list's
 /// dispatch args, then the three steps over the list.
@@ -69,6 +71,7 @@ impl Pass for HysteresisPass {
         let buffers = [
             ("P", &b.params),
             ("ruled", &b.ruled),
+            ("ruled4", &b.ruled),
             ("labels", &b.labels),
             ("flags", &b.flags),
             ("edges", &b.edges),

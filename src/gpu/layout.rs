@@ -94,10 +94,11 @@ pub struct FrameLayout {
     /// Pixels of all levels, not saturated: the GPU path refuses layouts over `u32::MAX`.
     pub total_px_exact: u64,
     /// Word offset of each level in a *column-packed* 8-bit plane (`classes`,
-    /// `ruled`): word `(y / 4) * w + x` of level l holds rows `4 (y / 4) ..+ 4`
-    /// of column x, row y in bits `8 (y % 4)..`; see [`pack_level`].
+    /// `edges`): word `(y / 4) * pitch + x` of level l holds rows `4 (y / 4)
+    /// ..+ 4` of column x, row y in bits `8 (y % 4)..`, `pitch` =
+    /// [`packed_pitch`]`(w)`; see [`pack_level`]. Each offset is a multiple of 4.
     pub packed_offsets: Vec<u32>,
-    /// Words of a column-packed plane over all levels (`sum w * ceil(h / 4)`).
+    /// Words of a column-packed plane over all levels (`sum pitch * ceil(h / 4)`).
     pub total_packed: u32,
     /// Per level window grid.
     pub grids: Vec<WindowLayout>,
@@ -135,7 +136,7 @@ impl FrameLayout {
             offsets.push(total.min(u32::MAX as u64) as u32);
             packed_offsets.push(total_packed.min(u32::MAX as u64) as u32);
             total += w as u64 * h as u64;
-            total_packed += w as u64 * h.div_ceil(4) as u64;
+            total_packed += packed_pitch(w) as u64 * h.div_ceil(4) as u64;
         }
         let mut grids = Vec::new();
         let mut window_offsets = Vec::new();
@@ -160,9 +161,13 @@ impl FrameLayout {
             grid_data.extend_from_slice(&g.xs);
             grid_data.extend_from_slice(&g.ys);
             grid_data.extend_from_slice(&g.col_window);
-            // row_window column-packed (pack_level): classify reads four rows a word
-            let rows: Vec<u8> = g.row_window.iter().map(|&j| j as u8).collect();
-            grid_data.extend(pack_level(1, h, &rows));
+            // row_window four rows a word (a one-column plane): classify reads
+            // a word per four rows
+            grid_data.extend(
+                g.row_window
+                    .chunks(4)
+                    .map(|c| c.iter().enumerate().fold(0u32, |word, (r, &j)| word | ((j as u8 as u32) << (8 * r)))),
+            );
             grids.push(g);
             if w > 2 * b && h > 2 * b {
                 capacity += ((w - 2 * b) as u64).div_ceil(r as u64 + 1) * ((h - 2 * b) as u64).div_ceil(r as u64 + 1);
@@ -309,7 +314,7 @@ impl FrameLayout {
     pub fn packed_range(&self, l: usize) -> std::ops::Range<usize> {
         let (w, h) = self.sizes[l];
         let o = self.packed_offsets[l] as usize;
-        o..o + (w * h.div_ceil(4)) as usize
+        o..o + (packed_pitch(w) * h.div_ceil(4)) as usize
     }
 }
 
@@ -377,25 +382,42 @@ pub fn halves_order(px: &[u64]) -> Vec<u32> {
     halves.concat()
 }
 
+/// Words from one row of words of a column-packed plane to the next: the
+/// level's width rounded up to a multiple of 4, so that the four columns
+/// `x0 .. x0 + 3` of a quad walk (`x0` a multiple of 4) are one aligned
+/// `vec4<u32>` (shaders/common.wgsl `pk_pitch`). The words past the width
+/// hold no pixel: a pass may store anything there, and none reads them as a
+/// pixel (walks clamp their columns into the level).
+///
+/// ```
+/// assert_eq!(lfast::gpu::layout::packed_pitch(1241), 1244);
+/// assert_eq!(lfast::gpu::layout::packed_pitch(1032), 1032);
+/// ```
+pub fn packed_pitch(w: u32) -> u32 {
+    w.next_multiple_of(4)
+}
+
 /// A `w x h` level of 8-bit values (row-major, `w * h` of them) as the
 /// words of a column-packed plane ([`FrameLayout::packed_offsets`]): four rows
-/// of a column per word, so a column walk reads a word per four rows. Rows
-/// past `h` in the last word are 0.
+/// of a column per word, so a column walk reads a word per four rows; rows of
+/// words [`packed_pitch`] apart. Rows past `h` in the last word, and the
+/// words past `w`, are 0.
 ///
 /// ```
 /// use lfast::gpu::layout::{pack_level, unpack_level};
 /// // 2 x 5: column 0 holds 1, 3, 5, 7, 9 and column 1 holds 2, 4, 6, 8, 10
 /// let v: Vec<u8> = (1..=10).collect();
 /// let words = pack_level(2, 5, &v);
-/// assert_eq!(words, vec![0x0705_0301, 0x0806_0402, 0x09, 0x0a]);
+/// assert_eq!(words, vec![0x0705_0301, 0x0806_0402, 0, 0, 0x09, 0x0a, 0, 0]);
 /// assert_eq!(unpack_level(2, 5, &words), v);
 /// ```
 pub fn pack_level(w: u32, h: u32, v: &[u8]) -> Vec<u32> {
+    let pitch = packed_pitch(w) as usize;
     let (w, h) = (w as usize, h as usize);
-    let mut words = vec![0u32; w * h.div_ceil(4)];
+    let mut words = vec![0u32; pitch * h.div_ceil(4)];
     for (y, row) in v.chunks_exact(w.max(1)).take(h).enumerate() {
         for (x, &b) in row.iter().enumerate() {
-            words[(y / 4) * w + x] |= (b as u32) << (8 * (y % 4));
+            words[(y / 4) * pitch + x] |= (b as u32) << (8 * (y % 4));
         }
     }
     words
@@ -495,8 +517,9 @@ pub fn unpack_ruled(w: u32, h: u32, words: &[u32]) -> Vec<u8> {
 
 /// The inverse of [`pack_level`]: `w * h` values in row-major order.
 pub fn unpack_level(w: u32, h: u32, words: &[u32]) -> Vec<u8> {
+    let pitch = packed_pitch(w) as usize;
     let (w, h) = (w as usize, h as usize);
-    (0..w * h).map(|i| (words[(i / w / 4) * w + i % w] >> (8 * (i / w % 4))) as u8).collect()
+    (0..w * h).map(|i| (words[(i / w / 4) * pitch + i % w] >> (8 * (i / w % 4))) as u8).collect()
 }
 
 #[cfg(test)]

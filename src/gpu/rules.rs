@@ -17,12 +17,14 @@ pub const BINDINGS: &[Binding] = &[
     b(2, "ruled", Slot::ReadWrite),
     b(3, "walks", Slot::ReadWrite),
     b(4, "counters", Slot::ReadWrite),
+    b(5, "classes4", Slot::Read),
 ];
 
 simple_pass! {
     /// The isolated-edge suppression pass (rules 1 and 2).
     RulesPass = "rules" {
         "classes" = classes,
+        "classes4" = classes,
         "ruled" = ruled,
         "walks" = walks,
         "counters" = counters,
