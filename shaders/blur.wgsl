@@ -10,14 +10,16 @@
 // Tests: tests/gpu_levels.rs (this pass alone == src/cpu/blur.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
 // Races: no atomics. Each invocation stores only the `smoothed` words of its
-// own four columns of its tile (quad_span); a tile's 16 rows are 4 whole words
+// own four columns of its tile (quad_span; past the level's width, the
+// padding words its quad covers); a tile's 16 rows are 4 whole words
 // of a column (common.wgsl pk_word) and the quads of the tile list do not
 // overlap, so no two invocations write one word.
 
 // `gray` is column-packed (common.wgsl pk_word).
 @group(0) @binding(1) var<storage, read> gray: array<u32>;
 // `smoothed` is Buffers::smooth (`smooth` is a WGSL reserved word).
-@group(0) @binding(2) var<storage, read_write> smoothed: array<u32>;
+// Four columns' words a store (common.wgsl pk_pitch), padding included.
+@group(0) @binding(2) var<storage, read_write> smoothed: array<vec4<u32>>;
 
 // cpu::blur::ORB_KERNEL
 const ORB_KERNEL: array<u32, 7> = array<u32, 7>(18u, 34u, 49u, 54u, 49u, 34u, 18u);
@@ -132,8 +134,9 @@ fn new_row(w: Window, n: Rows4, t: u32, y: u32, h: u32) -> vec4<u32> {
 // loads; rows above the level reflected by selects among them); each step
 // (a word of rows, in a loop) computes the next four rows' sums from ten
 // gray words (columns x0 - 3 .. x0 + 6, reflected), reflects those past the
-// level's last by selects, and writes four words of `smoothed`, none past the
-// walk's end or the level's right edge.
+// level's last by selects, and writes the four words of `smoothed` in one
+// store (none past the walk's end; past the level's right edge, the padding
+// words of its quad: common.wgsl pk_pitch).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
     let span = quad_span(wg, li);
@@ -182,11 +185,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
         let s3 = select(vec4<u32>(0u), vtaps(win.r3, win.r4, win.r5, win.r6, n4, n5, n6), valid.w);
         // column k's word: rows y .. y + 3 in its bytes
         let words = s0 | (s1 << vec4<u32>(8u)) | (s2 << vec4<u32>(16u)) | (s3 << vec4<u32>(24u));
-        let i = pk_word(l, x0, y);
-        smoothed[i] = words.x;
-        if (x0 + 1u < w) { smoothed[i + 1u] = words.y; }
-        if (x0 + 2u < w) { smoothed[i + 2u] = words.z; }
-        if (x0 + 3u < w) { smoothed[i + 3u] = words.w; }
+        smoothed[pk_word(l, x0, y) >> 2u] = words;
         win = Window(win.r4, win.r5, win.r6, n4, n5, n6, n7);
     }
 }
