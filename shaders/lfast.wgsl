@@ -20,7 +20,8 @@
 // atomicOr (several pixels share a word of `cand`) and takes its cand_list slot
 // with atomicAdd; the args entry points are single invocations.
 
-@group(0) @binding(1) var<storage, read> edges: array<u32>;
+// Four columns' words a load (a quad walk's x0 .. x0 + 3: common.wgsl pk_pitch).
+@group(0) @binding(1) var<storage, read> edges: array<vec4<u32>>;
 @group(0) @binding(2) var<storage, read> mask: array<u32>;
 @group(0) @binding(3) var<storage, read_write> cand: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> edge_bits: array<u32>;
@@ -28,10 +29,9 @@
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> cand_list: array<u32>;
 @group(0) @binding(8) var<storage, read_write> indirect: array<u32>;
-// `edges` and `edge_bits` again, four columns' words a load or store (a quad
-// walk's x0 .. x0 + 3: common.wgsl pk_pitch, tile_word), for `windows`
-@group(0) @binding(9) var<storage, read> edges4: array<vec4<u32>>;
-@group(0) @binding(10) var<storage, read_write> edge_bits4: array<vec4<u32>>;
+// `edge_bits` again, four columns' words a store (a quad walk's x0 .. x0 + 3:
+// common.wgsl tile_word), for `windows`
+@group(0) @binding(9) var<storage, read_write> edge_bits4: array<vec4<u32>>;
 
 // indirect::EDGES / 4 and indirect::CANDS / 4 in src/gpu/buffers.rs.
 const I_EDGES: u32 = 20u;
@@ -161,7 +161,7 @@ fn is_corner(l: u32, px: i32, py: i32) -> bool {
 fn window_nibbles(l: u32, x0: u32, g: i32, k: i32, h: u32) -> vec4<u32> {
     let i = g + k;
     let inside = i >= 0 && u32(i) * 4u < h;
-    let words = edges4[pk_word(l, x0, 4u * min(u32(max(i, 0)), (h - 1u) >> 2u)) >> 2u];
+    let words = edges[pk_word(l, x0, 4u * min(u32(max(i, 0)), (h - 1u) >> 2u)) >> 2u];
     let e = vec4<u32>(EDGE);
     let n = vec4<u32>(bits4(pk_rows(words.x) == e), bits4(pk_rows(words.y) == e), bits4(pk_rows(words.z) == e), bits4(pk_rows(words.w) == e));
     return select(vec4<u32>(0u), n << vec4<u32>(4u * u32(k)), inside);

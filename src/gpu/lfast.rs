@@ -29,8 +29,7 @@ pub const BINDINGS: &[Binding] = &[
     b(6, "counters", Slot::ReadWrite),
     b(7, "cand_list", Slot::ReadWrite),
     b(8, "indirect", Slot::ReadWrite),
-    b(9, "edges4", Slot::Read),
-    b(10, "edge_bits4", Slot::ReadWrite),
+    b(9, "edge_bits4", Slot::ReadWrite),
 ];
 
 /// The bindings of `main`, which is dispatched indirectly: all but
@@ -80,7 +79,6 @@ impl Pass for LfastPass {
             ("counters", &b.counters),
             ("cand_list", &b.cand_list),
             ("indirect", &b.indirect),
-            ("edges4", &b.edges),
             ("edge_bits4", &b.edge_bits),
         ];
         // `windows`, `args` and `cand_args` have the same layout entries: one group serves all three.
