@@ -10,7 +10,8 @@
 // counters[CORNERS] (slots past the capacity are not written); resp is only read,
 // and only at candidates (`cand` bits): response.wgsl writes those words only.
 
-@group(0) @binding(1) var<storage, read> cand: array<u32>;
+// Four columns' words a load (x a multiple of 4: common.wgsl pk_pitch).
+@group(0) @binding(1) var<storage, read> cand: array<vec4<u32>>;
 @group(0) @binding(2) var<storage, read> cand_list: array<u32>;
 @group(0) @binding(3) var<storage, read> resp: array<u32>;
 @group(0) @binding(4) var<storage, read_write> corners: array<Kp>;
@@ -38,23 +39,35 @@ fn suppress(l: u32, p: vec2<u32>) {
     let y0 = select(0u, p.y - r, p.y >= r);
     let x1 = min(p.x + r, w - 1u);
     let y1 = min(p.y + r, h - 1u);
-    // Column by column, a word of `cand` (four rows) at a time: the other
-    // candidates among its rows in the square as bits, then a `while` loop
-    // over those only reads their responses (candidates are sparse). Loops
-    // test at the top and stop once p is beaten: no early return inside (a
-    // SIMD software rasteriser keeps an exec mask per exit).
+    // Four columns and four rows at a time, one aligned load of `cand`
+    // words: the other candidates among them in the square as bits (bit
+    // 4k + r: column xc + k, row 4g + r), then a `while` loop over those
+    // only reads their responses (candidates are sparse; which beats p first
+    // changes nothing). Loops test at the top and stop once p is beaten: no
+    // early return inside (a SIMD software rasteriser keeps an exec mask per
+    // exit). Four columns a load: 1.86-1.90 -> 1.25-1.42 ms per KITTI frame on lavapipe
+    // (radius 4: 9 loads a candidate instead of 27).
     var beaten = false;
-    for (var x = x0; x <= x1 && !beaten; x++) {
-        for (var g = y0 >> 2u; g <= (y1 >> 2u) && !beaten; g++) {
-            let lo = u32(max(i32(y0) - i32(4u * g), 0));
-            let hi = u32(min(i32(y1) - i32(4u * g), 3));
-            var rows = bits4(pk_rows(cand[pk_word(l, x, 4u * g)]) != vec4<u32>(0u))
-                & ((2u << hi) - 1u) & ~((1u << lo) - 1u);
+    for (var g = y0 >> 2u; g <= (y1 >> 2u) && !beaten; g++) {
+        let lo = u32(max(i32(y0) - i32(4u * g), 0));
+        let hi = u32(min(i32(y1) - i32(4u * g), 3));
+        let rows = vec4<u32>(((2u << hi) - 1u) & ~((1u << lo) - 1u));
+        for (var xc = x0 & ~3u; xc <= x1 && !beaten; xc += 4u) {
+            let words = cand[pk_word(l, xc, 4u * g) >> 2u];
+            let cols = vec4<u32>(xc) + vec4<u32>(0u, 1u, 2u, 3u);
+            let b = select(vec4<u32>(0u), vec4<u32>(
+                bits4(pk_rows(words.x) != vec4<u32>(0u)), bits4(pk_rows(words.y) != vec4<u32>(0u)),
+                bits4(pk_rows(words.z) != vec4<u32>(0u)), bits4(pk_rows(words.w) != vec4<u32>(0u))) & rows,
+                (cols >= vec4<u32>(x0)) & (cols <= vec4<u32>(x1)));
+            var bits = b.x | (b.y << 4u) | (b.z << 8u) | (b.w << 12u);
             // not p itself
-            rows &= ~select(0u, 1u << (p.y - 4u * g), x == p.x && (p.y >> 2u) == g);
-            while (rows != 0u && !beaten) {
-                let y = 4u * g + countTrailingZeros(rows);
-                rows &= rows - 1u;
+            let own = p.x >= xc && p.x < xc + 4u && (p.y >> 2u) == g;
+            bits &= ~select(0u, 1u << (4u * (p.x - xc) + (p.y & 3u)), own);
+            while (bits != 0u && !beaten) {
+                let t = countTrailingZeros(bits);
+                bits &= bits - 1u;
+                let x = xc + (t >> 2u);
+                let y = 4u * g + (t & 3u);
                 beaten = beats(bitcast<f32>(resp[loff(l) + y * w + x]), vec2(x, y), rp, p);
             }
         }
