@@ -83,7 +83,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let last = span.z - 1u;
     let jt = pk_byte(grid[rows + (span.y >> 2u)], span.y);
     let jb = pk_byte(grid[rows + (last >> 2u)], last);
-    let k = Walk(l, x0, w, rows, t1, win0, g.x, i, jt, jb, v3s(win0, g.x, i, jt), v3s(win0, g.x, i, jb));
+    let k = Walk(l, x0, rows, t1, win0, g.x, i, jt, jb, v3s(win0, g.x, i, jt), v3s(win0, g.x, i, jb));
     for (var y = span.y; y < span.z; y += 4u) {
         step(k, y);
     }
@@ -94,14 +94,13 @@ fn v3s(win0: u32, nx: u32, i: vec4<u32>, j: u32) -> vec4<u32> {
     return vec4<u32>(v3_of(win0, nx, i.x, j), v3_of(win0, nx, i.y, j), v3_of(win0, nx, i.z, j), v3_of(win0, nx, i.w, j));
 }
 
-// What every word of a walk needs: level, first column, level width, the row
+// What every word of a walk needs: level, first column, the row
 // windows' offset in `grid`, Otsu's t1, the level's first window, windows
 // along x, the four columns' windows, the first and last rows' row windows
 // and the columns' V3 in them.
 struct Walk {
     l: u32,
     x0: u32,
-    w: u32,
     rows: u32,
     t1: u32,
     win0: u32,
