@@ -7,12 +7,15 @@
 // histogram hist[l * 256 + M8] (the cells partition the level, so summing
 // their bins counts every pixel once: histogram.wgsl's result, without a
 // count of its own in gradient_nms). Two entry points:
-// - cells: one workgroup per cell, workgroup_id = (column, row, z),
-//   dispatch (most cells along x, along y, n_levels), z the level's place in
+// - cells: one workgroup per cell, dispatched (total cells, 1, 1): the
+//   levels' cells one after another in the order of
 //   gpu::layout::halves_order (llvmpipe gives each thread a contiguous share
 //   of the workgroups: in level order the first of two had 80% of the
-//   pixels); it counts the cell in workgroup memory and adds each bin to
-//   every window holding the cell and to the level's histogram.
+//   pixels), each level's row by row; it counts the cell in workgroup memory
+//   and adds each bin to every window holding the cell and to the level's
+//   histogram. (Dispatched as most cells along x, along y, and a level per z,
+//   a KITTI frame's 2055 cells took 2888 workgroups; each idle one cost
+//   lavapipe ~1.2 us, ~1 ms of the pass's ~4.1.)
 //   CELL_INVOCATIONS (8) invocations: a KITTI cell is ~120x40 pixels at
 //   level 0 and ~30x10 at level 7, so a few columns each. Workgroup-wide
 //   work (the windows holding the cell, the barrier, the bins' walk) costs
@@ -20,7 +23,7 @@
 //   (256) took 57 ms per frame, 32 took 8.8 ms, 8 (one SIMD group) 7.2.
 // - stats: one invocation per window (64 a workgroup, dispatched over the
 //   windows of all levels): stats_of over the window's histogram.
-// Groups beyond a level's cells and invocations beyond the last window
+// Groups beyond the last cell and invocations beyond the last window
 // return at once. `window_hist` and
 // `hist` are cleared by the pass before it runs.
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/local_threshold.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
@@ -144,25 +147,44 @@ fn cells(
     @builtin(local_invocation_index) li: u32,
     @builtin(workgroup_id) wg: vec3<u32>,
 ) {
-    if (wg.z >= P.n_levels) { return; }
-    // the level of this z: two halves of about equal pixels (gpu::layout::halves_order)
-    let l = grid[P.cells + 4u * P.n_levels + wg.z];
+    // The cell of this workgroup: slot z of the levels' order (two halves of
+    // about equal pixels, gpu::layout::halves_order) is the last whose first
+    // cell (`before`, n_levels + 1 running counts) is <= wg.x. Selects with
+    // constant indices for the usual levels, a loop only past 8.
+    let order = P.cells + 4u * P.n_levels;
+    let before = order + P.n_levels;
+    let t = wg.x;
+    // Workgroup-uniform: the barrier below is reached by all or none.
+    if (t >= grid[before + P.n_levels]) { return; }
+    var z = 0u;
+    z = select(z, 1u, 1u < P.n_levels && t >= grid[before + 1u]);
+    z = select(z, 2u, 2u < P.n_levels && t >= grid[before + 2u]);
+    z = select(z, 3u, 3u < P.n_levels && t >= grid[before + 3u]);
+    z = select(z, 4u, 4u < P.n_levels && t >= grid[before + 4u]);
+    z = select(z, 5u, 5u < P.n_levels && t >= grid[before + 5u]);
+    z = select(z, 6u, 6u < P.n_levels && t >= grid[before + 6u]);
+    z = select(z, 7u, 7u < P.n_levels && t >= grid[before + 7u]);
+    for (var k = 8u; k < P.n_levels; k++) {
+        if (t >= grid[before + k]) { z = k; }
+    }
+    let l = grid[order + z];
     let hdr = P.cells + 4u * l;
     let cxo = grid[hdr];
     let ncx = grid[hdr + 1u];
     let cyo = grid[hdr + 2u];
     let ncy = grid[hdr + 3u];
-    // Workgroup-uniform: the barrier below is reached by all or none.
-    if (wg.x >= ncx || wg.y >= ncy) { return; }
-    let x0 = grid[cxo + wg.x];
-    let x1 = grid[cxo + wg.x + 1u];
-    let y0 = grid[cyo + wg.y];
-    let y1 = grid[cyo + wg.y + 1u];
+    let c = t - grid[before + z];
+    let cy = c / ncx;
+    let cx = c - cy * ncx;
+    let x0 = grid[cxo + cx];
+    let x1 = grid[cxo + cx + 1u];
+    let y0 = grid[cyo + cy];
+    let y1 = grid[cyo + cy + 1u];
     let g = P.grids[l];
     // the windows holding the cell (gpu::layout::holding, after each axis's
     // cuts): looked up, where a search over the origins cost ~0.3 ms per frame
-    let wx = grid[cxo + ncx + 1u + wg.x];
-    let wy = grid[cyo + ncy + 1u + wg.y];
+    let wx = grid[cxo + ncx + 1u + cx];
+    let wy = grid[cyo + ncy + 1u + cy];
     // Columns li, li + 8, ... of the cell, each down its rows a word (four
     // rows, `m` is column-packed) at a time. Values below 32 (~96% of the
     // pixels of a KITTI frame) are counted in registers, bit-sliced

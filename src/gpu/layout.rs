@@ -11,6 +11,11 @@ pub const MAX_LEVELS: usize = 32;
 pub use crate::spec::windows::MAX_WINDOWS_PER_AXIS;
 /// Most workgroups per row of the tile list (WebGPU's guaranteed per-dimension limit).
 pub const TILE_ROW: u32 = 65535;
+
+// local_threshold's `cells` dispatch is one row of workgroups, one per cell:
+// a level has at most 2 * MAX_WINDOWS_PER_AXIS + 1 cells along an axis (cut
+// at both edges of every window), so every layout's cells fit one row.
+const _: () = assert!((2 * MAX_WINDOWS_PER_AXIS + 1).pow(2) * MAX_LEVELS <= TILE_ROW as usize);
 /// Side of the 2D workgroups of per-pixel passes (`TILE` in shaders/common.wgsl).
 pub const TILE: u32 = 16;
 /// Tiles per workgroup of a column pass (`COLUMN_TILES` in shaders/common.wgsl).
@@ -111,12 +116,15 @@ pub struct FrameLayout {
     /// a window index is below [`MAX_WINDOWS_PER_AXIS`]); then, from
     /// `params.cells`, per level the header `[offset of cx, cells along x,
     /// offset of cy, cells along y]`, the levels in the order of
-    /// local_threshold's `cells` dispatch ([`halves_order`]), and each level's
-    /// cell cuts `cx`, `cy` ([`cell_cuts`]), each followed by its cells' window
-    /// ranges ([`holding`]).
+    /// local_threshold's `cells` dispatch ([`halves_order`]), the cells
+    /// before each of them in that order (`n_levels + 1` words: 0, ...,
+    /// [`total_cells`](Self::total_cells)), and each level's cell cuts `cx`,
+    /// `cy` ([`cell_cuts`]), each followed by its cells' window ranges
+    /// ([`holding`]).
     pub grid_data: Vec<u32>,
-    /// Most cells of any level along x and y.
-    pub max_cells: (u32, u32),
+    /// The cells of all levels: local_threshold's `cells` workgroups, one
+    /// per cell.
+    pub total_cells: u32,
     /// Keypoint slots: an upper bound on corners surviving corner NMS, so
     /// the list can never overflow (survivors are >= r+1 apart, see docs/algorithm.md).
     pub capacity: u32,
@@ -181,14 +189,18 @@ impl FrameLayout {
         p.cells = grid_data.len() as u32;
         let cells_data = 4 * grids.len();
         grid_data.resize(grid_data.len() + cells_data, 0);
-        // after the headers, the level of each z of local_threshold's `cells` dispatch
+        // after the headers, the levels in the order of local_threshold's
+        // `cells` dispatch, then the cells before each (filled below)
         let px: Vec<u64> = sizes.iter().map(|&(w, h)| w as u64 * h as u64).collect();
-        grid_data.extend(halves_order(&px));
-        let mut max_cells = (0, 0);
+        let order = halves_order(&px);
+        grid_data.extend(&order);
+        let before = grid_data.len();
+        grid_data.resize(before + order.len() + 1, 0);
+        let mut level_cells = Vec::with_capacity(sizes.len());
         for (l, (g, &(w, h))) in grids.iter().zip(&sizes).enumerate() {
             let (cx, cy) = (cell_cuts(&g.xs, g.a, w), cell_cuts(&g.ys, g.b, h));
             let (ncx, ncy) = (cx.len() as u32 - 1, cy.len() as u32 - 1);
-            max_cells = (ncx.max(max_cells.0), ncy.max(max_cells.1));
+            level_cells.push(ncx * ncy);
             let hdr = p.cells as usize + 4 * l;
             grid_data[hdr] = grid_data.len() as u32;
             grid_data[hdr + 1] = ncx;
@@ -199,6 +211,12 @@ impl FrameLayout {
             grid_data.extend_from_slice(&cy);
             grid_data.extend(cy.windows(2).map(|c| holding(&g.ys, g.b, c[0], c[1])));
         }
+        let mut total_cells = 0u32;
+        for (z, &l) in order.iter().enumerate() {
+            grid_data[before + z] = total_cells;
+            total_cells += level_cells[l as usize];
+        }
+        grid_data[before + order.len()] = total_cells;
         for (l, q) in level_quotas(cfg.n_features, &sizes).into_iter().enumerate() {
             p.quotas[l / 4][l % 4] = q;
         }
@@ -234,7 +252,7 @@ impl FrameLayout {
             window_offsets,
             total_windows,
             grid_data,
-            max_cells,
+            total_cells,
             capacity,
             params: p,
         }

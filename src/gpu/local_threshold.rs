@@ -56,8 +56,7 @@ impl Pass for LocalThresholdPass {
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        let (cx, cy) = b.layout.max_cells;
-        self.cells.dispatch(pass, bound, [cx, cy, b.layout.n_levels()]);
+        self.cells.dispatch(pass, bound, [b.layout.total_cells, 1, 1]);
         self.stats.dispatch(pass, bound, [b.layout.total_windows.div_ceil(64), 1, 1]);
     }
 
