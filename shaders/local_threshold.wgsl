@@ -7,7 +7,7 @@
 // histogram hist[l * 256 + M8] (the cells partition the level, so summing
 // their bins counts every pixel once: histogram.wgsl's result, without a
 // count of its own in gradient_nms). Two entry points:
-// - cells: one workgroup per cell, dispatched (total cells, 1, 1): the
+// - cells: one workgroup per cell (FrameLayout::cell_groups): the
 //   levels' cells one after another in the order of
 //   gpu::layout::halves_order (llvmpipe gives each thread a contiguous share
 //   of the workgroups: in level order the first of two had 80% of the
@@ -149,11 +149,12 @@ fn cells(
 ) {
     // The cell of this workgroup: slot z of the levels' order (two halves of
     // about equal pixels, gpu::layout::halves_order) is the last whose first
-    // cell (`before`, n_levels + 1 running counts) is <= wg.x. Selects with
-    // constant indices for the usual levels, a loop only past 8.
+    // cell (`before`, n_levels + 1 running counts) is <= t, the workgroup's
+    // index (rows of P.tile_row workgroups). Selects with constant indices for
+    // the usual levels, a loop only past 8.
     let order = P.cells + 4u * P.n_levels;
     let before = order + P.n_levels;
-    let t = wg.x;
+    let t = wg.x + wg.y * P.tile_row;
     // Workgroup-uniform: the barrier below is reached by all or none.
     if (t >= grid[before + P.n_levels]) { return; }
     var z = 0u;

@@ -391,11 +391,14 @@ impl Buffers {
         let [px_, py_, _] = layout.packed_level_groups(0);
         let [cx, cy, _] = layout.level_quad_groups(0);
         let (lx, ly) = (px_.max(cx), py_.max(cy));
-        if gx > lim || gy > lim || gz > lim || gk > lim || lx > lim || ly > lim {
+        // local_threshold's cells, in rows of tile_row
+        let [kx, ky, _] = layout.cell_groups();
+        if gx > lim || gy > lim || gz > lim || gk > lim || lx > lim || ly > lim || ky > lim {
             return Err(Error::GpuLimits {
                 reason: format!(
                     "a {width}x{height} frame needs {lx}x{ly} workgroups per level-0 pass, {gx}x{gy}x{gz} per \
-                     all-level pass and up to {gk} per keypoint pass; the device allows {lim} per dimension"
+                     all-level pass, {kx}x{ky} for the local thresholds' cells and up to {gk} per keypoint pass; \
+                     the device allows {lim} per dimension"
                 ),
             });
         }

@@ -11,11 +11,6 @@ pub const MAX_LEVELS: usize = 32;
 pub use crate::spec::windows::MAX_WINDOWS_PER_AXIS;
 /// Most workgroups per row of the tile list (WebGPU's guaranteed per-dimension limit).
 pub const TILE_ROW: u32 = 65535;
-
-// local_threshold's `cells` dispatch is one row of workgroups, one per cell:
-// a level has at most 2 * MAX_WINDOWS_PER_AXIS + 1 cells along an axis (cut
-// at both edges of every window), so every layout's cells fit one row.
-const _: () = assert!((2 * MAX_WINDOWS_PER_AXIS + 1).pow(2) * MAX_LEVELS <= TILE_ROW as usize);
 /// Side of the 2D workgroups of per-pixel passes (`TILE` in shaders/common.wgsl).
 pub const TILE: u32 = 16;
 /// Tiles per workgroup of a column pass (`COLUMN_TILES` in shaders/common.wgsl).
@@ -283,6 +278,12 @@ impl FrameLayout {
     /// `tile_row` workgroups.
     pub fn quad_groups(&self) -> [u32; 3] {
         self.in_rows(self.params.total_tiles.div_ceil(QUAD_TILES))
+    }
+
+    /// Workgroups of local_threshold's `cells`: one per cell of every level
+    /// ([`total_cells`](Self::total_cells)), in rows of `tile_row`.
+    pub fn cell_groups(&self) -> [u32; 3] {
+        self.in_rows(self.total_cells)
     }
 
     /// `n` workgroups in rows of at most `tile_row` (the device's per-dimension limit).

@@ -56,7 +56,7 @@ impl Pass for LocalThresholdPass {
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
-        self.cells.dispatch(pass, bound, [b.layout.total_cells, 1, 1]);
+        self.cells.dispatch(pass, bound, b.layout.cell_groups());
         self.stats.dispatch(pass, bound, [b.layout.total_windows.div_ceil(64), 1, 1]);
     }
 
