@@ -361,12 +361,12 @@ pub fn holding(origins: &[u32], size: u32, c0: u32, c1: u32) -> u32 {
 /// The levels in an order whose first half (`ceil(n / 2)` levels) and second
 /// half hold about as many pixels (`px[l]`, level l's): the largest first,
 /// each to the half with fewer pixels while it has room. Mesa's llvmpipe
-/// splits a dispatch's workgroups into one contiguous share per thread; with
-/// shaders/local_threshold.wgsl's `cells` dispatched a level per z in level
-/// order, the first of two threads had levels 0-3, 80% of the pixels, and
-/// each level's windows stay with one thread (the shares add into disjoint
-/// window histograms). 5.00-5.59 -> 4.32-4.69 ms per KITTI frame on two threads
-/// (`gpu_bench`, five alternated rounds).
+/// splits a dispatch's workgroups into one contiguous share per thread, and
+/// shaders/local_threshold.wgsl's `cells` takes the levels' cells in this
+/// order: in level order the first of two threads had levels 0-3, 80% of the
+/// pixels, and this way most levels' windows stay with one thread (the shares
+/// add into disjoint window histograms). 5.00-5.59 -> 4.32-4.69 ms per KITTI
+/// frame on two threads (`gpu_bench`, five alternated rounds).
 ///
 /// ```
 /// use lfast::gpu::layout::halves_order;
