@@ -557,4 +557,45 @@ mod tests {
         let tiny = FrameLayout::new(&cfg, 20, 20);
         assert_eq!(tiny.capacity, 1, "no level has room for a corner; one slot is kept");
     }
+
+    /// Decodes workgroup index `t` of local_threshold's `cells` as the shader
+    /// does: the last slot z of the levels' order whose first cell is <= t,
+    /// then the cell's column and row in level `order[z]`.
+    fn cell_of(l: &FrameLayout, t: u32) -> (u32, u32, u32) {
+        let (g, n) = (&l.grid_data, l.n_levels() as usize);
+        let order = l.params.cells as usize + 4 * n;
+        let before = order + n;
+        let z = (0..n).rfind(|&z| g[before + z] <= t).unwrap();
+        let lev = g[order + z];
+        let ncx = g[l.params.cells as usize + 4 * lev as usize + 1];
+        let c = t - g[before + z];
+        (lev, c % ncx, c / ncx)
+    }
+
+    #[test]
+    fn the_cells_dispatch_takes_every_cell_once() {
+        for (w, h, n_levels) in [(1241, 376, 8), (20, 20, 8), (1, 1, 1), (97, 33, 3), (3840, 2160, 12), (640, 480, 1)] {
+            let cfg = Config { n_levels, ..Config::default() };
+            let l = FrameLayout::new(&cfg, w, h);
+            let mut seen = std::collections::HashSet::new();
+            for t in 0..l.total_cells {
+                assert!(seen.insert(cell_of(&l, t)), "{w}x{h}: workgroup {t} repeats a cell");
+            }
+            // every level's cells, each once
+            let g = &l.grid_data;
+            let all: u32 = (0..l.n_levels() as usize)
+                .map(|lev| g[l.params.cells as usize + 4 * lev + 1] * g[l.params.cells as usize + 4 * lev + 3])
+                .sum();
+            assert_eq!(all, l.total_cells, "{w}x{h}");
+            for &(lev, cx, cy) in &seen {
+                let hdr = l.params.cells as usize + 4 * lev as usize;
+                assert!(cx < g[hdr + 1] && cy < g[hdr + 3], "{w}x{h}: cell ({cx}, {cy}) outside level {lev}");
+            }
+            // in rows of tile_row: enough workgroups, and no row more than needed
+            let mut small = l.clone();
+            small.params.tile_row = 64;
+            let [x, y, z] = small.cell_groups();
+            assert!(x <= 64 && z == 1 && x * y >= l.total_cells && x * (y - 1) < l.total_cells, "{w}x{h}");
+        }
+    }
 }
