@@ -74,33 +74,51 @@ fn fine_word(kp: Kp, k: u32) -> u32 {
     let sy = bitcast<i32>(kp.sub << 16u) >> 24u;
     let ox = i32(kp.px) * 16 + sx;
     let oy = i32(kp.py) * 16 + sy;
+    let lv = Level(i32(lw(l)) - 1, i32(lh(l)) - 1, P.tiles[l].w, pk_pitch(l));
     let base = P.orientation_bins * 64u + min(kp.bin, P.orientation_bins - 1u) * 128u + 16u * k;
     var word = 0u;
     for (var q = 0u; q < 16u; q++) {
         let two = patterns[base + q];
-        let bits = fine_bit(two.x, two.y, l, ox, oy) | (fine_bit(two.z, two.w, l, ox, oy) << 1u);
+        let bits = fine_bit(two.x, two.y, lv, ox, oy) | (fine_bit(two.z, two.w, lv, ox, oy) << 1u);
         word |= bits << (2u * q);
     }
     return word;
 }
 
+// What fine_sample needs of the keypoint's level, taken once a keypoint:
+// its last column and row, and its packed words' offset and pitch
+// (common.wgsl pk_word).
+struct Level {
+    xm: i32,
+    ym: i32,
+    base: u32,
+    pitch: u32,
+}
+
 // The bit of one pair (its two words a, b) of the keypoint at (ox, oy) in 1/16 px.
-fn fine_bit(a: u32, b: u32, l: u32, ox: i32, oy: i32) -> u32 {
-    let va = fine_sample(l, ox + (bitcast<i32>(a << 16u) >> 16u), oy + (bitcast<i32>(a) >> 16u));
-    let vb = fine_sample(l, ox + (bitcast<i32>(b << 16u) >> 16u), oy + (bitcast<i32>(b) >> 16u));
+fn fine_bit(a: u32, b: u32, lv: Level, ox: i32, oy: i32) -> u32 {
+    let va = fine_sample(lv, ox + (bitcast<i32>(a << 16u) >> 16u), oy + (bitcast<i32>(a) >> 16u));
+    let vb = fine_sample(lv, ox + (bitcast<i32>(b << 16u) >> 16u), oy + (bitcast<i32>(b) >> 16u));
     return select(0u, 1u, va < vb);
 }
 
 // 256 times the level's value at (qx, qy) in 1/16 px, bilinear over the
 // pixels (qx, qy) >> 4 to one right and one down, reads clamped
-// (src/cpu/orb.rs `sample_fine`).
-fn fine_sample(l: u32, qx: i32, qy: i32) -> u32 {
+// (src/cpu/orb.rs `sample_fine`): the two columns and two rows clamped once,
+// each row's word offset once, four loads.
+fn fine_sample(lv: Level, qx: i32, qy: i32) -> u32 {
     let ix = qx >> 4u;
     let iy = qy >> 4u;
     let fx = u32(qx & 15);
     let fy = u32(qy & 15);
-    let top = px(l, ix, iy) * (16u - fx) + px(l, ix + 1, iy) * fx;
-    let bottom = px(l, ix, iy + 1) * (16u - fx) + px(l, ix + 1, iy + 1) * fx;
+    let x0 = u32(clamp(ix, 0, lv.xm));
+    let x1 = u32(clamp(ix + 1, 0, lv.xm));
+    let y0 = u32(clamp(iy, 0, lv.ym));
+    let y1 = u32(clamp(iy + 1, 0, lv.ym));
+    let r0 = lv.base + (y0 >> 2u) * lv.pitch;
+    let r1 = lv.base + (y1 >> 2u) * lv.pitch;
+    let top = pk_byte(smoothed[r0 + x0], y0) * (16u - fx) + pk_byte(smoothed[r0 + x1], y0) * fx;
+    let bottom = pk_byte(smoothed[r1 + x0], y1) * (16u - fx) + pk_byte(smoothed[r1 + x1], y1) * fx;
     return top * (16u - fy) + bottom * fy;
 }
 
