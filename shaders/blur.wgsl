@@ -7,7 +7,13 @@
 // of a tile and keeps the horizontal sums of the rows its vertical taps need
 // in registers, so they never reach memory (two passes through a u32 plane,
 // `blur_tmp`, took 4.3 ms per KITTI frame on lavapipe; this one pass 2.2).
-// Tests: tests/gpu_levels.rs (this pass alone == src/cpu/blur.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+// Only the tiles marked in `blur_tiles` are smoothed: those holding a pixel
+// a descriptor reads (orientation.wgsl marks them, for every final keypoint;
+// ~60% of a KITTI frame's). The rest of `smoothed` is left as it was, and
+// nothing reads it.
+// Tests: tests/gpu_levels.rs (this pass alone, every tile marked ==
+// src/cpu/blur.rs), tests/gpu_blur_tiles.rs (some marked: those == the CPU's,
+// the others untouched) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
 // Races: no atomics. Each invocation stores only the `smoothed` words of its
 // own four columns of its tile (quad_span; past the level's width, the
@@ -20,6 +26,8 @@
 // `smoothed` is Buffers::smooth (`smooth` is a WGSL reserved word).
 // Four columns' words a store (common.wgsl pk_pitch), padding included.
 @group(0) @binding(2) var<storage, read_write> smoothed: array<vec4<u32>>;
+// A word per tile of the tile list: non-zero = smooth it (orientation.wgsl).
+@group(0) @binding(3) var<storage, read> blur_tiles: array<u32>;
 
 // cpu::blur::ORB_KERNEL
 const ORB_KERNEL: array<u32, 7> = array<u32, 7>(18u, 34u, 49u, 54u, 49u, 34u, 18u);
@@ -139,6 +147,9 @@ fn new_row(w: Window, n: Rows4, t: u32, y: u32, h: u32) -> vec4<u32> {
 // words of its quad: common.wgsl pk_pitch).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    // the walk's tile (as quad_span finds it): unmarked, nothing to do
+    let t = (wg.x + wg.y * P.tile_row) * QUAD_TILES + li.x / 4u;
+    if (t >= P.total_tiles || blur_tiles[t] == 0u) { return; }
     let span = quad_span(wg, li);
     if (span.y == span.z) { return; }
     let l = span.w;

@@ -38,6 +38,7 @@ fn fields(b: &Buffers) -> Vec<(&'static str, &wgpu::Buffer)> {
         ("flags", &b.flags),
         ("edges", &b.edges),
         ("edge_bits", &b.edge_bits),
+        ("blur_tiles", &b.blur_tiles),
         ("cand", &b.cand),
         ("cand_list", &b.cand_list),
         ("edge_list", &b.edge_list),

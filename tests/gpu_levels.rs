@@ -246,6 +246,7 @@ fn blur_matches_cpu_on_every_level() {
         let img = t::test_image(w, h, seed);
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
         let lv = t::upload_pyramid(&ctx, &cfg, &b, &img);
+        mark_every_tile(&ctx, &b);
         t::run(&ctx, &pass, &b).unwrap();
         for (l, p) in lv.iter().enumerate() {
             let want: Vec<u32> = blur::gaussian_blur(p, &blur::ORB_KERNEL).data.iter().map(|&v| v as u32).collect();
@@ -258,6 +259,7 @@ fn blur_matches_cpu_on_every_level() {
     let mut img = vec![0u8; 81];
     img[4 * 9 + 4] = 255;
     t::upload_packed(&ctx, &b, &b.gray, 0, &Plane::from_vec(9, 9, img).unwrap());
+    mark_every_tile(&ctx, &b);
     t::run(&ctx, &pass, &b).unwrap();
     let got = t::download_packed(&ctx, &b, &b.smooth, 0).unwrap();
     let k = blur::ORB_KERNEL;
@@ -268,6 +270,12 @@ fn blur_matches_cpu_on_every_level() {
             assert_eq!(got[y * 9 + x], (ky * kx * 255 + (1 << 15)) >> 16, "({x}, {y})");
         }
     }
+}
+
+/// Marks every tile for the blur pass (the orientation pass marks those the
+/// descriptors read; tests/gpu_blur_tiles.rs tests the marks).
+fn mark_every_tile(ctx: &GpuContext, b: &Buffers) {
+    t::upload(ctx, &b.blur_tiles, &vec![1; b.layout.params.total_tiles as usize]);
 }
 
 /// Keypoints on every level: the four corners, points 1-3 pixels from each

@@ -291,6 +291,10 @@ pub struct Buffers {
     /// E as bits for the L-FAST test: per column of each tile, its 16 rows
     /// and 8 more either side (shaders/lfast.wgsl; common.wgsl `tile_word`).
     pub edge_bits: wgpu::Buffer,
+    /// Per 16x16 tile of every level (the tile list), non-zero iff a
+    /// descriptor reads a pixel of it: written by orientation for each final
+    /// keypoint, read by blur, which smooths the marked tiles only.
+    pub blur_tiles: wgpu::Buffer,
     /// L-FAST candidates (0/1), column-packed as `classes`.
     ///
     /// One allocation with `classes` (their stages never overlap; [`footprint`](super::footprint)).
@@ -479,6 +483,7 @@ impl Buffers {
             flags: buf("flags", sizes.bits),
             edges: packed("edges"),
             edge_bits: buf("edge_bits", sizes.tiles),
+            blur_tiles: buf("blur_tiles", sizes.tile_words),
             cand,
             cand_list: list.clone(),
             edge_list: shared.clone(),

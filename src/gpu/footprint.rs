@@ -23,6 +23,8 @@ pub(crate) struct Sizes {
     pub atlas: u64,
     /// A tile-column plane (`ruled`, `edge_bits`): a word per column of every tile.
     pub tiles: u64,
+    /// A word per 16x16 tile of every level (`blur_tiles`).
+    pub tile_words: u64,
     /// The walk list.
     pub walks: u64,
     /// A bit per pixel of every level (`flags`).
@@ -75,6 +77,7 @@ impl Sizes {
             packed: a.packed * 4,
             atlas: layout.total_px as u64 * 4,
             tiles: a.tiles * TILE as u64 * 4,
+            tile_words: a.tiles * 4,
             walks: (a.tiles * 4 + 64) * 4,
             bits: (layout.total_px as u64).div_ceil(32) * 4,
             hist: 256 * 4 * a.levels,
@@ -115,6 +118,7 @@ impl Sizes {
             ("flags", s.bits),
             ("edges", s.packed),
             ("edge_bits", s.tiles),
+            ("blur_tiles", s.tile_words),
             (SHARED_LIST, s.lists()),
             (SHARED_CORNERS, s.shared_corners()),
             ("sel_buckets", SELECT_BUCKET_WORDS * 4),

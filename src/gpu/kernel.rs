@@ -45,9 +45,14 @@ pub const PARAMS: Binding = b(0, "P", Slot::Uniform);
 pub const DYNAMIC_STRIDE: u64 = 256;
 
 /// A shader's full source: the common prelude, the counters' slots
-/// ([`counter::wgsl`](super::buffers::counter::wgsl)), then the stage.
+/// ([`counter::wgsl`](super::buffers::counter::wgsl)), `DESC_REACH`
+/// ([`descriptor_reach`](crate::spec::pattern::descriptor_reach)), then the stage.
 pub fn full_source(stage_source: &str) -> String {
-    format!("{COMMON}\n{}\n{stage_source}", super::buffers::counter::wgsl())
+    format!(
+        "{COMMON}\n{}const DESC_REACH: i32 = {};\n\n{stage_source}",
+        super::buffers::counter::wgsl(),
+        crate::spec::pattern::descriptor_reach()
+    )
 }
 
 /// Compiles a stage shader (prelude + `stage_source`) into a module.

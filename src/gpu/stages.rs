@@ -147,8 +147,8 @@ stages! {
     corner_nms: CornerNmsPass,
     snap: SnapPass,
     select: SelectPass,
-    blur: BlurPass,
     orientation: OrientationPass,
+    blur: BlurPass,
     orb: OrbPass;
     standalone: matcher, gradient, nms, histogram, cand_list,
 }

@@ -118,6 +118,24 @@ impl Pattern {
     }
 }
 
+/// How far (pixels, along x and along y) from a keypoint's pixel its
+/// descriptor reads the smoothed level, in every descriptor mode: the
+/// whole-pixel tables and the rotation of the continuous mode stay within
+/// [`Pattern::radius`] (a rotated point rounded), and a sub-pixel sample at
+/// most one pixel further (its pixel is the keypoint's moved by less than
+/// half a pixel, `SUBPIXEL_MAX` / 16, plus the offset in 1/16 px rounded,
+/// and the bilinear read takes the next pixel too). The GPU smooths only the
+/// 16x16 tiles within this reach of a keypoint (shaders/orientation.wgsl marks
+/// them, shaders/blur.wgsl reads the marks). The tests check it against every
+/// table.
+///
+/// ```
+/// assert_eq!(lfast::spec::pattern::descriptor_reach(), lfast::spec::pattern::Pattern::orb().radius() + 1);
+/// ```
+pub fn descriptor_reach() -> i32 {
+    Pattern::orb().radius() + 1
+}
+
 /// The largest |offset| of a sub-pixel table (1/16 px).
 pub fn fine_reach(table: &[FinePair]) -> i32 {
     // (a plain fold: vectorised through `dispatch!` LLVM unrolled it into a
@@ -163,6 +181,47 @@ mod tests {
         assert_eq!(p.pairs[0], [8, -3, 9, 5]);
         assert_eq!(p.pairs[1], [4, 2, 7, -12]);
         assert!(p.radius() <= 19);
+    }
+
+    /// Every pixel a descriptor reads, in every mode, lies within
+    /// `descriptor_reach` of the keypoint's pixel: the bin tables' points,
+    /// the continuous rotation's (as cpu::orb rounds it) at many angles, and
+    /// the sub-pixel samples (offset plus a sub-pixel move of at most
+    /// SUBPIXEL_MAX / 16 either way, the bilinear read's next pixel included).
+    #[test]
+    fn descriptor_reach_bounds_every_read() {
+        let reach = descriptor_reach();
+        let p = Pattern::orb();
+        let sub = crate::spec::SUBPIXEL_MAX as i32;
+        for bins in [1u32, 2, 3, 7, 12, 30, 45, 90, 180, 360] {
+            let r = RotatedPatterns::new(p, bins);
+            for t in &r.tables {
+                assert!(t.as_flattened().iter().all(|&c| (c as i32).abs() <= reach), "{bins} bins");
+            }
+            for t in &r.fine {
+                for &o in t.as_flattened() {
+                    for s in [-sub, 0, sub] {
+                        // pixels (o + s) >> 4 and the next
+                        let lo = (o as i32 + s) >> 4;
+                        assert!(
+                            lo >= -reach && lo < reach,
+                            "{bins} bins, offset {o}, sub {s}: pixels {lo} and {}",
+                            lo + 1
+                        );
+                    }
+                }
+            }
+        }
+        for k in 0..3600 {
+            let a = (k as f32 / 10.0).to_radians();
+            let (sn, cs) = a.sin_cos();
+            for q in p.pairs.iter().flat_map(|q| [(q[0], q[1]), (q[2], q[3])]) {
+                let (x, y) = (q.0 as f32, q.1 as f32);
+                let rx = (x * cs - y * sn).round_ties_even() as i32;
+                let ry = (x * sn + y * cs).round_ties_even() as i32;
+                assert!(rx.abs() <= reach && ry.abs() <= reach, "angle {k}/10");
+            }
+        }
     }
 
     #[test]
