@@ -13,7 +13,11 @@
 //!
 //! Wall-clock milliseconds, best of `--rounds N` (default 3). A stage's
 //! module may hold entry points the detector does not build (snap's holds
-//! response's `main`): the "built" column is what the detector pays.
+//! response's `main`): the "built" column is what the detector pays. The
+//! WGSL is parsed once per process (`gpu::kernel::compile`; `GpuContext::new`
+//! starts parsing every shader on a thread of its own), so the best rounds
+//! show the module's validation only: `--rounds 1` right after the context
+//! may still include some shaders' parsing.
 
 use lfast::gpu::{GpuContext, GpuOptions, SHADERS, kernel, time_each_stage};
 use lfast::wgpu;

@@ -254,6 +254,7 @@ impl GpuContext {
     /// software adapter. This is the explicit request (`Backend::Gpu`); see
     /// [`new_auto`](Self::new_auto) for `Backend::Auto`.
     pub async fn new_async(opts: &GpuOptions) -> Result<Self> {
+        super::kernel::parse_shaders_in_background();
         let inst = instance(opts);
         let adapter = match opts.name() {
             Some(name) => {
@@ -275,6 +276,7 @@ impl GpuContext {
     /// the best hardware adapter. A software adapter is never taken unnamed:
     /// `Err(NoAdapter)` then, and the caller runs the CPU path.
     pub fn new_auto(opts: &GpuOptions) -> Result<Self> {
+        super::kernel::parse_shaders_in_background();
         pollster::block_on(async {
             let inst = instance(opts);
             let all = inst.enumerate_adapters(opts.backends()).await;

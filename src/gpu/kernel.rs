@@ -57,11 +57,50 @@ pub fn full_source(stage_source: &str) -> String {
 
 /// Compiles a stage shader (prelude + `stage_source`) into a module.
 /// Every pass compiles its shader through here: one place decides how.
+///
+/// A shader of [`SHADERS`](super::SHADERS) goes to wgpu as the naga module
+/// its WGSL parses to ([`parse_shaders_in_background`]; parsed here if not
+/// yet), so each is parsed once per process, not once per detector; wgpu
+/// validates it as it does WGSL. If the WGSL does not parse, it goes to wgpu
+/// as WGSL, whose error names the line.
 pub fn compile(device: &wgpu::Device, label: &str, stage_source: &str) -> wgpu::ShaderModule {
-    device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(full_source(stage_source).into()),
-    })
+    let source = match parsed(stage_source) {
+        Some(module) => wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module)),
+        None => wgpu::ShaderSource::Wgsl(full_source(stage_source).into()),
+    };
+    device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(label), source })
+}
+
+/// [`SHADERS`](super::SHADERS)[i] parsed (`None`: it does not parse).
+static PARSED: [std::sync::OnceLock<Option<naga::Module>>; super::SHADERS.len()] =
+    [const { std::sync::OnceLock::new() }; super::SHADERS.len()];
+
+/// The naga module of a shader of [`SHADERS`](super::SHADERS) (its full
+/// source parsed once per process); `None` for another source or WGSL that
+/// does not parse.
+fn parsed(stage_source: &str) -> Option<naga::Module> {
+    let i = super::SHADERS.iter().position(|s| s.source == stage_source)?;
+    PARSED[i].get_or_init(|| naga::front::wgsl::parse_str(&full_source(stage_source)).ok()).clone()
+}
+
+/// Parses every shader of [`SHADERS`](super::SHADERS) on a thread of its own,
+/// once per process (later calls return at once). `GpuContext::new` starts it
+/// before opening the adapter: the Vulkan loader's start (~30 ms on one core
+/// with lavapipe) leaves the other core free, and naga's WGSL front end is
+/// most of what creating a shader module costs (~1.1 ms a shader on the
+/// 2-vCPU VM, ~19 ms for a detector's). A detector built before it is done
+/// parses what it needs itself, as [`compile`] does.
+pub fn parse_shaders_in_background() {
+    static STARTED: std::sync::Once = std::sync::Once::new();
+    STARTED.call_once(|| {
+        let parse = || {
+            for s in super::SHADERS {
+                let _ = parsed(s.source);
+            }
+        };
+        // no thread to spare: the builders parse as they go
+        let _ = std::thread::Builder::new().name("lfast-wgsl".into()).spawn(parse);
+    });
 }
 
 /// A compute pipeline and the layout of its single bind group.
