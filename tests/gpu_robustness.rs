@@ -610,6 +610,25 @@ fn small_buffers(bytes: u64) -> wgpu::Limits {
     wgpu::Limits { max_storage_buffer_binding_size: bytes, max_buffer_size: bytes, ..env_adapter().limits() }
 }
 
+/// lfast's own device is warmed up while the detector builds (empty
+/// dispatches on a small workspace); an embedder's queue gets no submission
+/// it did not ask for. Both give the same frames.
+#[test]
+fn only_lfasts_own_device_is_warmed_up_and_both_give_the_same_frames() {
+    let Some(own) = t::context() else { return };
+    assert!(own.owns_queue());
+    let theirs = context_with_limits(env_adapter().limits()).unwrap();
+    assert!(!theirs.owns_queue());
+    let img = load_gray(common::data("coins.png")).unwrap();
+    let run = |ctx: GpuContext| {
+        let det = GpuDetector::new(ctx, Config::default()).unwrap();
+        det.detect_and_compute(&mut None, img.view(), None).unwrap()
+    };
+    let (a, b) = (run(own), run(theirs));
+    assert!(a.keypoints.len() > 100);
+    assert_eq!((a.keypoints, a.descriptors), (b.keypoints, b.descriptors));
+}
+
 #[test]
 fn frames_over_small_limits_are_gpu_limits_errors() {
     let Some(_) = t::context() else { return };

@@ -106,6 +106,10 @@ pub struct GpuContext {
     /// The adapter's description.
     pub info: wgpu::AdapterInfo,
     lost: Arc<Mutex<Option<String>>>,
+    /// Opened by lfast ([`new`](Self::new), [`new_auto`](Self::new_auto)):
+    /// nobody else submits to its queue, so a detector may (see
+    /// [`owns_queue`](Self::owns_queue)).
+    owned: bool,
 }
 
 /// The instance lfast opens its own adapters from: the options' backends,
@@ -300,7 +304,7 @@ impl GpuContext {
             })
             .await
             .map_err(|e| Error::Gpu { reason: format!("device request refused by {}: {e}", info.name) })?;
-        Ok(Self::from_device(device, queue, info))
+        Ok(Self { owned: true, ..Self::from_device(device, queue, info) })
     }
 
     /// Wraps an embedder's device. lfast installs a device-lost callback (so
@@ -315,7 +319,15 @@ impl GpuContext {
             }
         });
         device.on_uncaptured_error(Arc::new(|e| log::error!("uncaptured wgpu error: {e}")));
-        Self { device, queue, info, lost }
+        Self { device, queue, info, lost, owned: false }
+    }
+
+    /// Whether lfast opened this device itself (not [`from_device`](Self::from_device)):
+    /// then a detector built on it warms its pipelines up with empty
+    /// dispatches while it builds them (`GpuDetector::new`). An embedder's
+    /// queue gets no submission it did not ask for.
+    pub fn owns_queue(&self) -> bool {
+        self.owned
     }
 
     /// [`check_lost`](Self::check_lost) after a non-blocking poll, which runs

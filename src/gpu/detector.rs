@@ -18,6 +18,10 @@ use crate::error::{Error, Result};
 use crate::image::{GrayView, Plane};
 use crate::spec::{self, level_mask};
 
+/// Side of the frame whose workspace a detector warms its pipelines up on
+/// (`Passes::new`): a few tiles a level, a small allocation.
+const WARM_UP_SIDE: u32 = 64;
+
 /// Where a frame comes from.
 #[derive(Clone, Copy, Debug)]
 pub enum GpuInput<'a> {
@@ -154,7 +158,11 @@ impl GpuDetector {
                 reason: format!("the passes bind up to {need} storage buffers, {} allows {have}", ctx.info.name),
             });
         }
-        let passes = Passes::new(&ctx.device)?;
+        // On lfast's own device, the pipelines are warmed up on a small
+        // workspace as they are built (Passes::new); none on an embedder's.
+        let small =
+            if ctx.owns_queue() { Buffers::new(&ctx.device, &cfg, WARM_UP_SIDE, WARM_UP_SIDE).ok() } else { None };
+        let passes = Passes::new(&ctx.device, small.as_ref().map(|b| (&ctx.queue, b)))?;
         Ok(Self { ctx, cfg, opts, passes, mask_radius: spec::mask_radius() })
     }
 

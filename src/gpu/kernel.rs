@@ -249,22 +249,22 @@ impl Kernel {
 
     /// Sets the pipeline and bind group and dispatches `groups` workgroups.
     pub fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>, bg: &wgpu::BindGroup, groups: [u32; 3]) {
-        if groups.contains(&0) {
+        if groups.contains(&0) && !warming_up() {
             return;
         }
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bg, &[]);
-        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+        dispatch_or_warm(pass, groups);
     }
 
     /// As [`dispatch`](Self::dispatch) with the bind group's dynamic offset.
     pub fn dispatch_at(&self, pass: &mut wgpu::ComputePass<'_>, bg: &wgpu::BindGroup, offset: u32, groups: [u32; 3]) {
-        if groups.contains(&0) {
+        if groups.contains(&0) && !warming_up() {
             return;
         }
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bg, &[offset]);
-        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+        dispatch_or_warm(pass, groups);
     }
 
     /// Dispatches with the workgroup counts read from `indirect` at `offset`
@@ -278,8 +278,47 @@ impl Kernel {
     ) {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bg, &[]);
-        pass.dispatch_workgroups_indirect(indirect, offset);
+        if warming_up() {
+            pass.dispatch_workgroups(0, 0, 0);
+        } else {
+            pass.dispatch_workgroups_indirect(indirect, offset);
+        }
     }
+}
+
+thread_local! {
+    /// Set by [`warm_up`] on its thread: every dispatch recorded is empty.
+    static WARMING_UP: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+fn warming_up() -> bool {
+    WARMING_UP.with(|w| w.get())
+}
+
+fn dispatch_or_warm(pass: &mut wgpu::ComputePass<'_>, groups: [u32; 3]) {
+    if warming_up() {
+        pass.dispatch_workgroups(0, 0, 0);
+    } else {
+        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+    }
+}
+
+/// Runs `record` with every dispatch it records through [`Kernel`] made empty
+/// (0 x 0 x 0 workgroups: bound and validated, nothing runs). A driver that
+/// prepares a pipeline at its first dispatch, as lavapipe does (~30 ms of the
+/// first frame for a detector's 37, one after another on its queue thread),
+/// prepares it then: a detector warms each stage up as soon as it is built,
+/// while the other stages still build (`stages::Passes::new`).
+pub(crate) fn warm_up<R>(record: impl FnOnce() -> R) -> R {
+    struct Reset;
+    impl Drop for Reset {
+        fn drop(&mut self) {
+            WARMING_UP.with(|w| w.set(false));
+        }
+    }
+    WARMING_UP.with(|w| w.set(true));
+    let _reset = Reset;
+    record()
 }
 
 /// A buffer holding `contents` (padded to 4 bytes), like wgpu's
@@ -300,4 +339,21 @@ pub fn init_buffer(device: &wgpu::Device, label: &str, contents: &[u8], usage: w
 /// Workgroups of `size` threads needed to cover `n` items.
 pub fn groups(n: u32, size: u32) -> u32 {
     n.div_ceil(size)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn warm_up_holds_on_its_thread_only_and_ends_with_the_call() {
+        assert!(!warming_up());
+        let inside = warm_up(|| (warming_up(), std::thread::spawn(warming_up).join().unwrap()));
+        assert_eq!(inside, (true, false), "set inside, on this thread only");
+        assert!(!warming_up());
+        // a panic inside resets it too
+        let r = std::panic::catch_unwind(|| warm_up(|| panic!("inside")));
+        assert!(r.is_err());
+        assert!(!warming_up());
+    }
 }

@@ -59,9 +59,23 @@ macro_rules! stages {
             /// scopes ([`checked`]); a shader that does not compile or a
             /// pipeline that fails validation is an [`Error::Gpu`] naming
             /// every stage that failed.
-            pub(crate) fn new(device: &wgpu::Device) -> Result<Self> {
+            ///
+            /// With `warm` (a queue nobody else submits to, and a small
+            /// workspace), each thread then records its stage on the
+            /// workspace with every dispatch empty and submits it
+            /// ([`kernel::warm_up`](super::kernel::warm_up)): a driver that
+            /// prepares pipelines at their first dispatch does it while the
+            /// other stages still build, not one after another in the first
+            /// frame.
+            pub(crate) fn new(device: &wgpu::Device, warm: Option<(&wgpu::Queue, &Buffers)>) -> Result<Self> {
                 std::thread::scope(|s| {
-                    $(let $m = s.spawn(|| checked(device, stringify!($m), || <super::$m::$ty as Pass>::new(device)));)*
+                    $(let $m = s.spawn(|| checked(device, stringify!($m), || {
+                        let built = <super::$m::$ty as Pass>::new(device);
+                        if let Some((queue, b)) = warm {
+                            warm_up(&built, device, queue, b);
+                        }
+                        built
+                    }));)*
                     let mut errors = Vec::new();
                     $(let $m = joined($m, &mut errors);)*
                     match ($($m,)*) {
@@ -174,6 +188,20 @@ pub(crate) fn checked<T>(
         Some(e) => Err(format!("stage `{stage}`: {e}")),
         None => Ok(built),
     }
+}
+
+/// Records `pass` on `b` with every dispatch empty and submits it (see
+/// [`Passes::new`]). A workspace the stage cannot bind is left alone: the
+/// first frame reports it.
+fn warm_up<P: Pass>(pass: &P, device: &wgpu::Device, queue: &wgpu::Queue, b: &Buffers) {
+    let Ok(bound) = pass.bind(device, b) else { return };
+    let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lfast warm-up") });
+    {
+        let mut cp = enc
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("lfast warm-up"), timestamp_writes: None });
+        super::kernel::warm_up(|| pass.record(&mut cp, &bound, b));
+    }
+    queue.submit([enc.finish()]);
 }
 
 /// The result of a [`checked`] builder thread: `Some` when it built, else
