@@ -8,8 +8,8 @@
 // in registers, so they never reach memory (two passes through a u32 plane,
 // `blur_tmp`, took 4.3 ms per KITTI frame on lavapipe; this one pass 2.2).
 // Only the tiles marked in `blur_tiles` are smoothed: those holding a pixel
-// a descriptor reads (orientation.wgsl marks them, for every final keypoint;
-// ~60% of a KITTI frame's). The rest of `smoothed` is left as it was, and
+// a descriptor reads (select.wgsl's place marks them, for every final
+// keypoint; ~60% of a KITTI frame's). The rest of `smoothed` is left as it was, and
 // nothing reads it.
 // Tests: tests/gpu_levels.rs (this pass alone, every tile marked ==
 // src/cpu/blur.rs), tests/gpu_blur_tiles.rs (some marked: those == the CPU's,
@@ -26,7 +26,7 @@
 // `smoothed` is Buffers::smooth (`smooth` is a WGSL reserved word).
 // Four columns' words a store (common.wgsl pk_pitch), padding included.
 @group(0) @binding(2) var<storage, read_write> smoothed: array<vec4<u32>>;
-// A word per tile of the tile list: non-zero = smooth it (orientation.wgsl).
+// A word per tile of the tile list: non-zero = smooth it (select.wgsl).
 @group(0) @binding(3) var<storage, read> blur_tiles: array<u32>;
 
 // cpu::blur::ORB_KERNEL

@@ -9,19 +9,10 @@
 // workgroups paid its own work). The moments are exact integers on
 // the *unsmoothed* level; the angle is an f32 approximation (the host
 // recomputes it exactly from m10, m01).
-//
-// It also marks, for blur.wgsl (which runs next and smooths the marked tiles
-// only), the 16x16 tiles of the keypoint's level that hold a pixel its
-// descriptor reads: those within DESC_REACH (spec::pattern::descriptor_reach)
-// of the keypoint's pixel, clamped into the level as orb.wgsl's reads are.
-// On a KITTI frame ~60% of the tiles are marked.
-// Tests: tests/gpu_levels.rs (this pass alone == src/cpu/orientation.rs),
-// tests/gpu_blur_tiles.rs (the marks, by hand and against the host's) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+// Tests: tests/gpu_levels.rs (this pass alone == src/cpu/orientation.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
 // Races: invocation i stores keypoints[i] only (a whole keypoint, read and
 // written by the same invocation), so no two invocations write one word.
-// `blur_tiles` words are written with atomicStore of 1 only (the pass's
-// prepare clears them): any order leaves the same marks.
 
 const HALF_PATCH: i32 = 15;
 // OpenCV ORB's umax: half-width of row v of the radius-15 disc (cpu::orientation::UMAX).
@@ -33,36 +24,6 @@ const UMAX: array<i32, 16> = array<i32, 16>(15, 15, 15, 15, 14, 14, 14, 13, 13, 
 @group(0) @binding(3) var<storage, read> counters: array<u32>;
 // Per bin the Q8 direction (cos, sin) of its upper boundary (AngleBins::bounds).
 @group(0) @binding(4) var<storage, read> angle_bounds: array<vec2<i32>>;
-// A word per tile of the tile list (common.wgsl tile_origin): 1 = blur it.
-@group(0) @binding(5) var<storage, read_write> blur_tiles: array<atomic<u32>>;
-
-// Marks the tiles of level l holding a pixel within DESC_REACH of (x, y),
-// clamped into the level: at most 4 x 4 tiles for a reach up to 24
-// (tests/gpu_blur_tiles.rs checks DESC_REACH against it), stored
-// straight-line, the columns and rows past the last repeating it (nested
-// loops bounded per lane cost lavapipe ~0.07 ms a KITTI frame more).
-fn mark_tiles(l: u32, x: i32, y: i32) {
-    let xm = i32(lw(l)) - 1;
-    let ym = i32(lh(l)) - 1;
-    let tx0 = u32(clamp(x - DESC_REACH, 0, xm)) / TILE;
-    let tx1 = u32(clamp(x + DESC_REACH, 0, xm)) / TILE;
-    let ty0 = u32(clamp(y - DESC_REACH, 0, ym)) / TILE;
-    let ty1 = u32(clamp(y + DESC_REACH, 0, ym)) / TILE;
-    let t = P.tiles[l];
-    let cols = t.x + min(vec4<u32>(tx0) + vec4<u32>(0u, 1u, 2u, 3u), vec4<u32>(tx1));
-    let rows = min(vec4<u32>(ty0) + vec4<u32>(0u, 1u, 2u, 3u), vec4<u32>(ty1)) * t.y;
-    mark_row(cols + rows.x);
-    mark_row(cols + rows.y);
-    mark_row(cols + rows.z);
-    mark_row(cols + rows.w);
-}
-
-fn mark_row(c: vec4<u32>) {
-    atomicStore(&blur_tiles[c.x], 1u);
-    atomicStore(&blur_tiles[c.y], 1u);
-    atomicStore(&blur_tiles[c.z], 1u);
-    atomicStore(&blur_tiles[c.w], 1u);
-}
 
 // Half column k's share of (m10, m01) over the disc around (x, y) (those
 // pixels of the 31x31 square with |u| <= UMAX[|v|]): k < 62 is column
@@ -178,7 +139,6 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
     let kx = i32(keypoints[i].px);
     let ky = i32(keypoints[i].py);
     if (level >= P.n_levels) { return; }
-    mark_tiles(level, kx, ky);
     var m = vec2<i32>(0);
     // n_levels <= 32: a bound the compiler cannot see
     let halves = 62u + (P.n_levels >> 6u);

@@ -46,8 +46,17 @@
 // counters' stores by the single invocation of args / finish; scan_sums[li]
 // and each bucket's prefix words by lane li of the one scan workgroup, between
 // barriers; tile_* [li] by lane li between barriers; wg_n, wg_max, wg_min by
-// lane 0 (or through atomics).
-// Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/select.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
+// lane 0 (or through atomics); `blur_tiles` words with atomicStore of 1 only
+// (the pass's prepare clears them): any order leaves the same marks.
+//
+// `place` also marks, for blur.wgsl, the 16x16 tiles of each placed
+// keypoint's level that hold a pixel its descriptor reads: those within
+// DESC_REACH (spec::pattern::descriptor_reach) of the keypoint's pixel,
+// clamped into the level as orb.wgsl's reads are (~60% of a KITTI frame's
+// tiles). (Marked in orientation, which then had to run before blur, its
+// reads of the level missed the cache blur had filled: +0.3 ms a frame.)
+// Tests: tests/gpu_keypoints.rs (this pass alone == src/cpu/select.rs),
+// tests/gpu_blur_tiles.rs (the marks, by hand and against the host's) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 
 @group(0) @binding(1) var<storage, read> corners: array<Kp>;
 @group(0) @binding(2) var<storage, read_write> counters: array<atomic<u32>>;
@@ -61,6 +70,36 @@
 // The records of each bucket's corners, bucket by bucket (its range starts at
 // the bucket's corners-before count).
 @group(0) @binding(7) var<storage, read_write> members: array<vec4<u32>>;
+// A word per tile of the tile list (common.wgsl tile_origin): 1 = blur it.
+@group(0) @binding(8) var<storage, read_write> blur_tiles: array<atomic<u32>>;
+
+// Marks the tiles of level l holding a pixel within DESC_REACH of (x, y),
+// clamped into the level: at most 4 x 4 tiles for a reach up to 24
+// (tests/gpu_blur_tiles.rs checks DESC_REACH against it), stored
+// straight-line, the columns and rows past the last repeating it (nested
+// loops bounded per lane cost lavapipe ~0.07 ms a KITTI frame more).
+fn mark_tiles(l: u32, x: i32, y: i32) {
+    let xm = i32(lw(l)) - 1;
+    let ym = i32(lh(l)) - 1;
+    let tx0 = u32(clamp(x - DESC_REACH, 0, xm)) / TILE;
+    let tx1 = u32(clamp(x + DESC_REACH, 0, xm)) / TILE;
+    let ty0 = u32(clamp(y - DESC_REACH, 0, ym)) / TILE;
+    let ty1 = u32(clamp(y + DESC_REACH, 0, ym)) / TILE;
+    let t = P.tiles[l];
+    let cols = t.x + min(vec4<u32>(tx0) + vec4<u32>(0u, 1u, 2u, 3u), vec4<u32>(tx1));
+    let rows = min(vec4<u32>(ty0) + vec4<u32>(0u, 1u, 2u, 3u), vec4<u32>(ty1)) * t.y;
+    mark_row(cols + rows.x);
+    mark_row(cols + rows.y);
+    mark_row(cols + rows.z);
+    mark_row(cols + rows.w);
+}
+
+fn mark_row(c: vec4<u32>) {
+    atomicStore(&blur_tiles[c.x], 1u);
+    atomicStore(&blur_tiles[c.y], 1u);
+    atomicStore(&blur_tiles[c.z], 1u);
+    atomicStore(&blur_tiles[c.w], 1u);
+}
 
 // gpu::select::BUCKETS = 1 << BUCKET_BITS.
 const BUCKET_BITS: u32 = 12u;
@@ -279,7 +318,11 @@ fn place(@builtin(global_invocation_id) gid: vec3<u32>) {
     let sp = spare();
     if (ri.y == 1u || rest_before < sp) {
         let at = taken_before + min(rest_before, sp);
-        if (at < P.capacity) { keypoints[at] = corners[i]; }
+        if (at < P.capacity) {
+            let c = corners[i];
+            keypoints[at] = c;
+            if (c.level < P.n_levels) { mark_tiles(c.level, i32(c.px), i32(c.py)); }
+        }
     }
 }
 

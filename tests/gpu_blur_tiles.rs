@@ -1,7 +1,7 @@
-//! The blur pass smooths only the tiles a descriptor reads: the orientation
-//! pass marks them in `blur_tiles` (every 16x16 tile of the keypoint's level
-//! within `spec::pattern::descriptor_reach` of its pixel, clamped into the
-//! level), and blur leaves the others as they were. Hand-checked marks, marks
+//! The blur pass smooths only the tiles a descriptor reads: the select pass
+//! marks them in `blur_tiles` for every keypoint it places (every 16x16 tile
+//! of the keypoint's level within `spec::pattern::descriptor_reach` of its
+//! pixel, clamped into the level), and blur leaves the others as they were. Hand-checked marks, marks
 //! against a host reference, and blur on a subset of marked tiles against
 //! src/cpu/blur.rs. (That the whole pipeline's descriptors are unchanged is
 //! tests/gpu_end_to_end.rs.)
@@ -10,27 +10,15 @@ mod common;
 use lfast::Config;
 use lfast::cpu::blur;
 use lfast::gpu::blur::BlurPass;
-use lfast::gpu::buffers::{counter, indirect};
-use lfast::gpu::orientation::OrientationPass;
+use lfast::gpu::buffers::counter;
+use lfast::gpu::select::SelectPass;
 use lfast::gpu::{Buffers, GpuContext, GpuKeypoint, Pass};
 use lfast::spec::pattern::descriptor_reach;
 use lfast::testing as t;
 
-/// Writes the keypoints, `counters[KEYPOINTS]` and the orientation pass's indirect args.
-fn upload_keypoints(ctx: &GpuContext, b: &Buffers, kps: &[GpuKeypoint]) {
-    ctx.queue.write_buffer(&b.keypoints, 0, bytemuck::cast_slice(kps));
-    let mut counters = [0u32; counter::LEN];
-    counters[counter::KEYPOINTS] = kps.len() as u32;
-    t::upload(ctx, &b.counters, &counters);
-    ctx.queue.write_buffer(
-        &b.indirect,
-        indirect::KEYPOINTS,
-        bytemuck::cast_slice(&[(kps.len() as u32).div_ceil(64), 1, 1]),
-    );
-}
-
+/// A corner at (px, py) of `level`, its response `r` (select's order).
 fn kp(level: u32, px: u32, py: u32) -> GpuKeypoint {
-    GpuKeypoint { level, px, py, ..Default::default() }
+    GpuKeypoint { level, px, py, response: 1.0 + (px * 7 + py * 3) as f32, ..Default::default() }
 }
 
 /// Tile index (the tile list, common.wgsl tile_origin) of tile (tx, ty) of level l.
@@ -60,78 +48,92 @@ fn marks(b: &Buffers, kps: &[GpuKeypoint], reach: i32) -> Vec<u32> {
     m
 }
 
-fn run_orientation(ctx: &GpuContext, b: &Buffers, kps: &[GpuKeypoint]) -> Vec<u32> {
-    upload_keypoints(ctx, b, kps);
-    // stale marks of an earlier frame: the pass clears them first
+/// Runs select alone on `corners` (stale marks in `blur_tiles` first: the
+/// pass clears them); the marks and the keypoints it placed.
+fn run_select(ctx: &GpuContext, b: &Buffers, corners: &[GpuKeypoint]) -> (Vec<u32>, Vec<GpuKeypoint>) {
+    if !corners.is_empty() {
+        ctx.queue.write_buffer(&b.corners, 0, bytemuck::cast_slice(corners));
+    }
+    let mut counters = [0u32; counter::LEN];
+    counters[counter::CORNERS] = corners.len() as u32;
+    t::upload(ctx, &b.counters, &counters);
     t::upload(ctx, &b.blur_tiles, &vec![1; b.layout.params.total_tiles as usize]);
-    t::run(ctx, &OrientationPass::new(&ctx.device), b).unwrap();
-    let got = t::download(ctx, &b.blur_tiles).unwrap();
-    got[..b.layout.params.total_tiles as usize].to_vec()
+    t::run(ctx, &SelectPass::new(&ctx.device), b).unwrap();
+    let n = t::download(ctx, &b.counters).unwrap()[counter::KEYPOINTS] as usize;
+    let words = t::download(ctx, &b.keypoints).unwrap();
+    let placed = bytemuck::cast_slice::<u32, GpuKeypoint>(&words)[..n].to_vec();
+    let marks = t::download(ctx, &b.blur_tiles).unwrap()[..b.layout.params.total_tiles as usize].to_vec();
+    (marks, placed)
+}
+
+fn marked(m: &[u32]) -> Vec<usize> {
+    m.iter().enumerate().filter(|(_, v)| **v != 0).map(|(i, _)| i).collect()
 }
 
 #[test]
 fn the_reach_fits_four_tiles_a_side() {
-    // orientation.wgsl marks at most 4 x 4 tiles, straight-line
+    // select.wgsl marks at most 4 x 4 tiles, straight-line
     let r = descriptor_reach();
     assert!((2 * r + 1 + 15 + 15) / 16 <= 4, "reach {r}");
     assert!(r >= 19, "reach {r}: the ORB pattern's radius is 19");
 }
 
 #[test]
-fn orientation_marks_the_tiles_by_hand() {
+fn select_marks_the_tiles_by_hand() {
     let Some(ctx) = t::context() else { return };
     let reach = descriptor_reach();
     assert_eq!(reach, 20, "the literal cases below assume a reach of 20");
     let cfg = Config { n_levels: 1, ..Config::default() };
     // 100 x 70: tiles 7 x 5 (the last column and row partial)
     let b = Buffers::new(&ctx.device, &cfg, 100, 70).unwrap();
-    t::upload_packed(&ctx, &b, &b.gray, 0, &t::test_image(100, 70, 1));
     // (0, 0): columns and rows 0 ..= 20, tiles 0 and 1 each way
-    let got = run_orientation(&ctx, &b, &[kp(0, 0, 0)]);
-    let want: Vec<usize> = vec![tile(&b, 0, 0, 0), tile(&b, 0, 1, 0), tile(&b, 0, 0, 1), tile(&b, 0, 1, 1)];
-    assert_eq!(got.iter().enumerate().filter(|(_, v)| **v != 0).map(|(i, _)| i).collect::<Vec<_>>(), want);
+    let (m, placed) = run_select(&ctx, &b, &[kp(0, 0, 0)]);
+    assert_eq!(placed.len(), 1);
+    assert_eq!(marked(&m), vec![tile(&b, 0, 0, 0), tile(&b, 0, 1, 0), tile(&b, 0, 0, 1), tile(&b, 0, 1, 1)]);
     // (50, 69): columns 30 ..= 70 (tiles 1 ..= 4), rows 49 ..= 69 (tiles 3, 4)
-    let got = run_orientation(&ctx, &b, &[kp(0, 50, 69)]);
-    let mut want = Vec::new();
-    for ty in 3..=4 {
-        for tx in 1..=4 {
-            want.push(tile(&b, 0, tx, ty));
-        }
-    }
-    assert_eq!(got.iter().enumerate().filter(|(_, v)| **v != 0).map(|(i, _)| i).collect::<Vec<_>>(), want);
-    // no keypoints: no marks (the stale ones cleared)
-    assert!(run_orientation(&ctx, &b, &[]).iter().all(|&v| v == 0));
+    let (m, _) = run_select(&ctx, &b, &[kp(0, 50, 69)]);
+    let want: Vec<usize> =
+        (3..=4).flat_map(|ty| (1..=4).map(move |tx| (tx, ty))).map(|(tx, ty)| tile(&b, 0, tx, ty)).collect();
+    assert_eq!(marked(&m), want);
+    // no corners: no marks (the stale ones cleared)
+    assert!(run_select(&ctx, &b, &[]).0.iter().all(|&v| v == 0));
+    // on level 1 of three (200 x 120: level 1 is 167 x 100): columns 40 ..= 80
+    // (tiles 2 ..= 5), rows 20 ..= 60 (tiles 1 ..= 3), nothing on the other levels
+    let cfg = Config { n_levels: 3, ..Config::default() };
+    let b = Buffers::new(&ctx.device, &cfg, 200, 120).unwrap();
+    let (m, _) = run_select(&ctx, &b, &[kp(1, 60, 40)]);
+    let want: Vec<usize> =
+        (1..=3).flat_map(|ty| (2..=5).map(move |tx| (tx, ty))).map(|(tx, ty)| tile(&b, 1, tx, ty)).collect();
+    assert_eq!(marked(&m), want);
 }
 
 #[test]
-fn orientation_marks_what_the_host_does() {
+fn select_marks_what_the_host_does_for_the_keypoints_it_places() {
     let Some(ctx) = t::context() else { return };
     let reach = descriptor_reach();
-    for (w, h, levels, seed) in [(130, 75, 4, 1u32), (257, 190, 6, 2), (640, 120, 8, 3)] {
-        let cfg = Config { n_levels: levels, ..Config::default() };
+    for (w, h, levels, cap, seed) in [(130, 75, 4, 1000, 1u32), (257, 190, 6, 1000, 2), (640, 120, 8, 40, 3)] {
+        let cfg = Config { n_levels: levels, n_features: cap, ..Config::default() };
         let b = Buffers::new(&ctx.device, &cfg, w, h).unwrap();
-        t::upload_pyramid(&ctx, &cfg, &b, &t::test_image(w, h, seed));
-        // keypoints at the corners and edges of every level and pseudo-random ones
-        let mut kps = Vec::new();
+        // corners at the corners, edges and centre of every level and pseudo-random ones
+        let mut corners = Vec::new();
         let mut r = common::TestRng::new(seed.into());
         for (l, &(lw, lh)) in b.layout.sizes.iter().enumerate() {
             for (x, y) in [(0, 0), (lw - 1, lh - 1), (lw - 1, 0), (0, lh - 1), (lw / 2, lh / 2)] {
-                kps.push(kp(l as u32, x, y));
+                corners.push(kp(l as u32, x, y));
             }
             for _ in 0..20 {
-                kps.push(kp(l as u32, r.below(lw), r.below(lh)));
+                corners.push(kp(l as u32, r.below(lw), r.below(lh)));
             }
         }
-        kps.truncate(b.layout.capacity as usize);
-        assert!(kps.len() > 64, "more than one workgroup");
-        let got = run_orientation(&ctx, &b, &kps);
-        assert_eq!(got, marks(&b, &kps, reach), "{w}x{h}");
-        // a few keypoints mark a part of the tiles only
-        let few = &kps[..3];
-        let got = run_orientation(&ctx, &b, few);
-        let want = marks(&b, few, reach);
-        assert_eq!(got, want, "{w}x{h}, three keypoints");
-        assert!(want.contains(&0), "{w}x{h}: some tiles unmarked");
+        corners.truncate(b.layout.capacity as usize);
+        assert!(corners.len() > 64, "more than one workgroup");
+        let (m, placed) = run_select(&ctx, &b, &corners);
+        assert!(!placed.is_empty());
+        assert_eq!(m, marks(&b, &placed, reach), "{w}x{h}, cap {cap}");
+        if cap < corners.len() as u32 {
+            // the corners left out mark nothing
+            assert!(marks(&b, &corners, reach) != m, "{w}x{h}: the cap left tiles unmarked");
+        }
     }
 }
 
@@ -163,23 +165,4 @@ fn blur_smooths_the_marked_tiles_only() {
             }
         }
     }
-}
-
-/// The CPU's smoothed level equals the GPU's on every tile the whole
-/// pipeline marked: checked through the descriptors in
-/// tests/gpu_end_to_end.rs; here a plane with one keypoint per level.
-#[test]
-fn a_keypoint_per_level_marks_its_neighbourhood_on_its_level_only() {
-    let Some(ctx) = t::context() else { return };
-    let cfg = Config { n_levels: 3, ..Config::default() };
-    let b = Buffers::new(&ctx.device, &cfg, 200, 120).unwrap();
-    t::upload_pyramid(&ctx, &cfg, &b, &t::test_image(200, 120, 5));
-    let kps = [kp(1, 60, 40)];
-    let got = run_orientation(&ctx, &b, &kps);
-    for (i, &v) in got.iter().enumerate() {
-        let in_level_1 = (b.layout.params.tiles[1][0] as usize..b.layout.params.tiles[2][0] as usize).contains(&i);
-        assert!(v == 0 || in_level_1, "tile {i} marked outside level 1");
-    }
-    // columns 40 ..= 80 (tiles 2 ..= 5), rows 20 ..= 60 (tiles 1 ..= 3)
-    assert_eq!(got.iter().filter(|&&v| v != 0).count(), 4 * 3);
 }

@@ -272,7 +272,7 @@ fn blur_matches_cpu_on_every_level() {
     }
 }
 
-/// Marks every tile for the blur pass (the orientation pass marks those the
+/// Marks every tile for the blur pass (the select pass marks those the
 /// descriptors read; tests/gpu_blur_tiles.rs tests the marks).
 fn mark_every_tile(ctx: &GpuContext, b: &Buffers) {
     t::upload(ctx, &b.blur_tiles, &vec![1; b.layout.params.total_tiles as usize]);

@@ -1,7 +1,7 @@
 //! SPEC 11 smoothing on the GPU: shaders/blur.wgsl, mirroring src/cpu/blur.rs.
 //! `gray` -> `smooth` in one quad pass over all levels (the horizontal sums
 //! stay in registers), on the tiles marked in `blur_tiles` only (those the
-//! descriptors read; the orientation pass marks them).
+//! descriptors read; the select pass marks them).
 
 use super::kernel::{Binding, PARAMS, Slot, b};
 use super::pass::{Groups, simple_pass};

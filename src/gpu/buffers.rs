@@ -292,7 +292,7 @@ pub struct Buffers {
     /// and 8 more either side (shaders/lfast.wgsl; common.wgsl `tile_word`).
     pub edge_bits: wgpu::Buffer,
     /// Per 16x16 tile of every level (the tile list), non-zero iff a
-    /// descriptor reads a pixel of it: written by orientation for each final
+    /// descriptor reads a pixel of it: written by select for each final
     /// keypoint, read by blur, which smooths the marked tiles only.
     pub blur_tiles: wgpu::Buffer,
     /// L-FAST candidates (0/1), column-packed as `classes`.

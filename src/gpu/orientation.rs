@@ -1,9 +1,7 @@
 //! SPEC 11 orientation on the GPU: shaders/orientation.wgsl, mirroring
 //! src/cpu/orientation.rs. Per final keypoint (indirect dispatch over
 //! `counters[KEYPOINTS]`): m10, m01 on the unsmoothed `gray` level, the
-//! orientation bin, and an approximate angle, written back into `keypoints`;
-//! and the marks in `blur_tiles` of the tiles the descriptors read (cleared
-//! first by the pass), which the blur pass after it smooths.
+//! orientation bin, and an approximate angle, written back into `keypoints`.
 
 use super::buffers::indirect;
 use super::kernel::{Binding, PARAMS, Slot, b};
@@ -18,7 +16,6 @@ pub const BINDINGS: &[Binding] = &[
     b(2, "keypoints", Slot::ReadWrite),
     b(3, "counters", Slot::Read),
     b(4, "angle_bounds", Slot::Read),
-    b(5, "blur_tiles", Slot::ReadWrite),
 ];
 
 simple_pass! {
@@ -28,7 +25,6 @@ simple_pass! {
         "keypoints" = keypoints,
         "counters" = counters,
         "angle_bounds" = angle_bounds,
-        "blur_tiles" = blur_tiles,
     }
-    dispatch |b| Groups::Indirect(indirect::KEYPOINTS); clear blur_tiles
+    dispatch |b| Groups::Indirect(indirect::KEYPOINTS)
 }

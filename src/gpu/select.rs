@@ -3,7 +3,9 @@
 //! `distribution = false` (the quadtree distribution is not done on the GPU).
 //! `corners` + `counters[counter::CORNERS]` -> `keypoints` in SPEC 9 order,
 //! `counters[counter::KEYPOINTS]`, and the `indirect` args over corners,
-//! keypoints and the keypoint draw. `ranks` is scratch.
+//! keypoints and the keypoint draw. `ranks` is scratch. `place` also marks
+//! in `blur_tiles` (cleared by the pass first) the tiles the keypoints'
+//! descriptors read, which the blur pass smooths.
 
 use super::buffers::{Buffers, indirect};
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
@@ -22,6 +24,7 @@ pub const BINDINGS: &[Binding] = &[
     b(5, "indirect", Slot::ReadWrite),
     b(6, "buckets", Slot::ReadWrite),
     b(7, "members", Slot::ReadWrite),
+    b(8, "blur_tiles", Slot::ReadWrite),
 ];
 
 pub use super::buffers::{SELECT_BUCKET_WORDS as BUCKET_WORDS, SELECT_BUCKETS as BUCKETS};
@@ -37,6 +40,7 @@ const RANK_BINDINGS: &[Binding] = &[
     b(4, "keypoints", Slot::ReadWrite),
     b(6, "buckets", Slot::ReadWrite),
     b(7, "members", Slot::ReadWrite),
+    b(8, "blur_tiles", Slot::ReadWrite),
 ];
 
 /// The select pass: seven entry points of one shader, in recording order.
@@ -88,6 +92,7 @@ impl Pass for SelectPass {
             ("keypoints", &b.keypoints),
             ("buckets", &b.sel_buckets),
             ("members", &b.sel_members),
+            ("blur_tiles", &b.blur_tiles),
         ];
         let mut full = common.to_vec();
         full.push(("indirect", &b.indirect));
@@ -105,7 +110,9 @@ impl Pass for SelectPass {
     }
 
     fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
-        // count and scatter add into the bucket counts and cursors.
+        // count and scatter add into the bucket counts and cursors; place
+        // marks the tiles blur smooths.
         encoder.clear_buffer(&b.sel_buckets, 0, None);
+        encoder.clear_buffer(&b.blur_tiles, 0, None);
     }
 }

@@ -161,8 +161,8 @@ stages! {
     corner_nms: CornerNmsPass,
     snap: SnapPass,
     select: SelectPass,
-    orientation: OrientationPass,
     blur: BlurPass,
+    orientation: OrientationPass,
     orb: OrbPass;
     standalone: matcher, gradient, nms, histogram, cand_list,
 }

@@ -125,7 +125,7 @@ impl Pattern {
 /// most one pixel further (its pixel is the keypoint's moved by less than
 /// half a pixel, `SUBPIXEL_MAX` / 16, plus the offset in 1/16 px rounded,
 /// and the bilinear read takes the next pixel too). The GPU smooths only the
-/// 16x16 tiles within this reach of a keypoint (shaders/orientation.wgsl marks
+/// 16x16 tiles within this reach of a keypoint (shaders/select.wgsl marks
 /// them, shaders/blur.wgsl reads the marks). The tests check it against every
 /// table.
 ///
