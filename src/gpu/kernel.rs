@@ -83,18 +83,20 @@ fn parsed(stage_source: &str) -> Option<naga::Module> {
     PARSED[i].get_or_init(|| naga::front::wgsl::parse_str(&full_source(stage_source)).ok()).clone()
 }
 
-/// Parses every shader of [`SHADERS`](super::SHADERS) on a thread of its own,
-/// once per process (later calls return at once). `GpuContext::new` starts it
+/// Parses the stages' shaders (the first [`STAGES`](super::STAGES)`.len()` of
+/// [`SHADERS`](super::SHADERS), in pipeline order; the standalone ones parse
+/// when first compiled) on a thread of its own, once per process (later calls
+/// return at once). `GpuContext::new` starts it
 /// before opening the adapter: the Vulkan loader's start (~30 ms on one core
 /// with lavapipe) leaves the other core free, and naga's WGSL front end is
 /// most of what creating a shader module costs (~1.1 ms a shader on the
-/// 2-vCPU VM, ~19 ms for a detector's). A detector built before it is done
-/// parses what it needs itself, as [`compile`] does.
+/// 2-vCPU VM, ~19 ms for a detector's 17). A detector built before it is
+/// done parses what it needs itself, as [`compile`] does.
 pub fn parse_shaders_in_background() {
     static STARTED: std::sync::Once = std::sync::Once::new();
     STARTED.call_once(|| {
         let parse = || {
-            for s in super::SHADERS {
+            for s in &super::SHADERS[..super::STAGES.len()] {
                 let _ = parsed(s.source);
             }
         };

@@ -72,7 +72,7 @@ macro_rules! stages {
                     $(let $m = s.spawn(|| checked(device, stringify!($m), || {
                         let built = <super::$m::$ty as Pass>::new(device);
                         if let Some((queue, b)) = warm {
-                            warm_up(&built, device, queue, b);
+                            warm_up_stage(&built, device, queue, b);
                         }
                         built
                     }));)*
@@ -193,7 +193,7 @@ pub(crate) fn checked<T>(
 /// Records `pass` on `b` with every dispatch empty and submits it (see
 /// [`Passes::new`]). A workspace the stage cannot bind is left alone: the
 /// first frame reports it.
-fn warm_up<P: Pass>(pass: &P, device: &wgpu::Device, queue: &wgpu::Queue, b: &Buffers) {
+fn warm_up_stage<P: Pass>(pass: &P, device: &wgpu::Device, queue: &wgpu::Queue, b: &Buffers) {
     let Ok(bound) = pass.bind(device, b) else { return };
     let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lfast warm-up") });
     {
