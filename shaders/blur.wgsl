@@ -147,8 +147,8 @@ fn new_row(w: Window, n: Rows4, t: u32, y: u32, h: u32) -> vec4<u32> {
 // words of its quad: common.wgsl pk_pitch).
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
-    // the walk's tile (as quad_span finds it): unmarked, nothing to do
-    let t = (wg.x + wg.y * P.tile_row) * QUAD_TILES + li.x / 4u;
+    // the walk's tile: unmarked, nothing to do
+    let t = quad_tile(wg, li);
     if (t >= P.total_tiles || blur_tiles[t] == 0u) { return; }
     let span = quad_span(wg, li);
     if (span.y == span.z) { return; }

@@ -164,8 +164,10 @@ fn column_span(wg: vec3<u32>, li: vec3<u32>) -> vec4<u32> {
 // pays for (docs/gpu.md). Returns (x0, top row, end row, level); no rows
 // (end = top) past the last tile or the level's right edge.
 const QUAD_TILES: u32 = 16u;
+// The index in the tile list of this invocation's tile in a quad pass.
+fn quad_tile(wg: vec3<u32>, li: vec3<u32>) -> u32 { return (wg.x + wg.y * P.tile_row) * QUAD_TILES + li.x / 4u; }
 fn quad_span(wg: vec3<u32>, li: vec3<u32>) -> vec4<u32> {
-    let o = tile_origin((wg.x + wg.y * P.tile_row) * QUAD_TILES + li.x / 4u);
+    let o = tile_origin(quad_tile(wg, li));
     if (o.x == NO_TILE) { return vec4<u32>(0u); }
     let x0 = o.x + 4u * (li.x % 4u);
     if (x0 >= lw(o.z)) { return vec4<u32>(0u); }
