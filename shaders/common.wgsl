@@ -43,6 +43,7 @@ struct Params {
     cells: u32,         // offset in `grid` of the SPEC 5 cells (FrameLayout::grid_data)
     snap_radius: u32,   // corners move to the Harris maximum within this radius (snap.wgsl)
     reject_edges: u32,  // 1: a response not above 0 does not survive corner NMS (corner_nms.wgsl)
+    taps: u32,          // offset in `grid` of the pyramid's taps (FrameLayout::grid_data)
 }
 
 @group(0) @binding(0) var<uniform> P: Params;

@@ -9,7 +9,7 @@
 // level l's columns 4 id.x .. 4 id.x + 3 at rows 16 wg.y .. + 15 (the padding
 // words past the level's width included): 4 whole words per column
 // (common.wgsl pk_word), disjoint across invocations; it reads level
-// l - 1 only, which this dispatch does not write.
+// l - 1 only, which this dispatch does not write, and the taps in `grid`.
 
 const COEF_BITS: u32 = 11u;
 const ONE: u32 = 2048u; // 1 << COEF_BITS
@@ -19,32 +19,25 @@ const ONE: u32 = 2048u; // 1 << COEF_BITS
 // `gray` again, four columns' words a store (common.wgsl pk_pitch; the
 // padding words past the level's width included)
 @group(0) @binding(3) var<storage, read_write> gray4: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> grid: array<u32>;
+@group(0) @binding(5) var<storage, read> grid4: array<vec4<u32>>;
 
-// Source index and Q11 weight of the right/lower neighbour for destination
-// index d when resizing src_len -> dst_len, exactly as cpu::pyramid::tap:
-// the source coordinate is ((2d+1)*src - dst) / (2*dst), clamped. Sides are
-// at most MAX_SIDE = 16384, so every product fits 32 bits (udiv: no
-// integer division).
-fn tap(d: u32, src_len: u32, dst_len: u32) -> vec2<u32> {
-    let a = (2u * d + 1u) * src_len;
-    let den = 2u * dst_len;
-    if (a < dst_len) { return vec2(0u, 0u); }
-    let num = a - dst_len;
-    let s = udiv(num, den);
-    if (s + 1u >= src_len) { return vec2(src_len - 1u, 0u); }
-    let rem = num - s * den;
-    // round(rem / den * 2048), half up
-    let w = udiv(rem * ONE * 2u + den, 2u * den);
-    return vec2(s, w);
-}
+// The taps come from the grid buffer (FrameLayout::grid_data, from P.taps):
+// grid[P.taps + l] is the offset of level l's table, a multiple of 4: the
+// taps of its columns 0 .. pitch - 1 (padded to a multiple of 4 with the
+// last column's), then those of its rows (padded as well), each the source
+// index s | the Q11 weight w of the right / lower neighbour << 16, made by
+// cpu::pyramid::tap, the CPU's own (`s` < 16384 = MAX_SIDE, `w` <= 2048).
+// A walk loads its four columns' taps as one vec4 and four rows' at a time.
+// (Computed here, a tap took two integer divisions per lane, a row's for
+// every lane of the walk: the pass 2.40 -> 2.30 ms per KITTI frame on
+// lavapipe with the table, 2.53 -> 2.39 with four rows' taps a load.)
 
 // Dispatched as FrameLayout::level_quad_groups: each invocation walks 16
 // rows of four neighbouring destination columns x0 .. x0 + 3 (four packed
-// words each). Their horizontal taps are computed once; each row's vertical
-// tap (two divisions, the same for every column) once for the four; and a
-// source row's blends are reused by the next destination row that reads it.
-// (One column per invocation, the vertical taps were ~0.7 of the pass's
-// ~3.9 ms per KITTI frame on lavapipe.)
+// words each). Their horizontal taps are read once; each row's vertical
+// tap once for the four; and a source row's blends are reused by the next
+// destination row that reads it.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
     let l = level_index.x;
@@ -58,27 +51,25 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg:
     let sw = lw(p);
     let sh = lh(p);
     // the four columns' taps (a column past the level's edge takes the last's)
-    let xs = min(vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u), vec4<u32>(dw - 1u));
-    let t0 = tap(xs.x, sw, dw);
-    let t1 = tap(xs.y, sw, dw);
-    let t2 = tap(xs.z, sw, dw);
-    let t3 = tap(xs.w, sw, dw);
-    let sx0 = vec4<u32>(t0.x, t1.x, t2.x, t3.x);
-    let c = Columns(l, p, x0, dw, sx0, min(sx0 + vec4<u32>(1u), vec4<u32>(sw - 1u)), vec4<u32>(t0.y, t1.y, t2.y, t3.y), sh, dh, min(y0 + TILE, dh));
+    let tc = grid[P.taps + l];
+    let tx = grid4[(tc + x0) >> 2u];
+    let sx0 = tx & vec4<u32>(0xffffu);
+    let c = Columns(l, p, x0, dw, sx0, min(sx0 + vec4<u32>(1u), vec4<u32>(sw - 1u)), tx >> vec4<u32>(16u), sh, dh, min(y0 + TILE, dh), tc + pk_pitch(l));
     // the blends of source rows r0 and r1 of the previous destination row
     var b: Blends;
     b.r0 = 0xffffffffu;
     b.r1 = 0xffffffffu;
     b.cg = 0xffffffffu;
     for (var y = y0; y < c.end; y += 4u) {
-        let words = row_value(&b, c, y) | row_value(&b, c, y + 1u) | row_value(&b, c, y + 2u) | row_value(&b, c, y + 3u);
+        let tw = grid4[(c.rows + y) >> 2u];
+        let words = row_value(&b, c, y, tw.x) | row_value(&b, c, y + 1u, tw.y) | row_value(&b, c, y + 2u, tw.z) | row_value(&b, c, y + 3u, tw.w);
         gray4[pk_word(l, x0, y) >> 2u] = words;
     }
 }
 
 // A walk's destination columns x0 .. x0 + 3 of level l (source level p):
 // the level's width, their horizontal taps, the source height, the level's
-// height, the walk's end row.
+// height, the walk's end row, the offset of the level's row taps in `grid`.
 struct Columns {
     l: u32,
     p: u32,
@@ -90,6 +81,7 @@ struct Columns {
     sh: u32,
     dh: u32,
     end: u32,
+    rows: u32,
 }
 
 // The horizontal blends h0, h1 of source rows r0, r1 (the previous
@@ -118,12 +110,12 @@ fn hblend(b: ptr<function, Blends>, c: Columns, sy: u32) -> vec4<u32> {
     return (vec4<u32>(ONE) - c.wx) * pk_byte4((*b).cw0, sy) + c.wx * pk_byte4((*b).cw1, sy);
 }
 
-// Destination row y of the four columns in its place in their packed words
-// (0 past the walk's end, which no branch below runs for: y and the walk are
+// Destination row y of the four columns (`tw` its row's tap) in its place in
+// their packed words (0 past the walk's end, which no branch below runs for: y and the walk are
 // the same for the whole workgroup).
-fn row_value(b: ptr<function, Blends>, c: Columns, y: u32) -> vec4<u32> {
+fn row_value(b: ptr<function, Blends>, c: Columns, y: u32, tw: u32) -> vec4<u32> {
     if (y >= c.end) { return vec4<u32>(0u); }
-    let ty = tap(y, c.sh, c.dh);
+    let ty = vec2<u32>(tw & 0xffffu, tw >> 16u);
     let sy0 = ty.x;
     let sy1 = min(sy0 + 1u, c.sh - 1u);
     // rows only move down: the new upper row is the old lower or upper one, or new

@@ -187,10 +187,15 @@ impl Allocated {
             keypoints: layout.capacity as u64,
             windows: levels * per_level,
             // xs, ys, then per level a cell header, at most 2 cuts per window
-            // and 2 more per axis, and a window range per cell
+            // and 2 more per axis, and a window range per cell; the
+            // pyramid's taps, a word per column and row of a level past the
+            // first, each level's and the header padded to 4 words
             grid: sides
                 + levels * 2 * MAX_WINDOWS_PER_AXIS as u64
-                + levels * (4 + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 2) + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 1)),
+                + levels * (4 + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 2) + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 1))
+                + sides
+                + levels * 10
+                + 6,
             input: (w as u64 * h as u64).next_multiple_of(4),
             levels: layout.n_levels() as u64,
             tiles: layout.params.total_tiles as u64,
@@ -257,7 +262,7 @@ pub struct Buffers {
     pub hist: wgpu::Buffer,
     /// Per level T1 = k + 1, or 0 when the level has no edges.
     pub otsu: wgpu::Buffer,
-    /// Window grids: per level xs, ys, col_window, row_window (FrameLayout::grid_data).
+    /// Window grids: per level xs, ys, col_window, row_window; the cells; the pyramid's taps (FrameLayout::grid_data).
     pub grid: wgpu::Buffer,
     /// Per window min, max, median, V3.
     pub windows: wgpu::Buffer,

@@ -78,8 +78,36 @@ pub struct Params {
     /// 1: a candidate whose Harris response is not above 0 does not survive
     /// corner NMS (`Config::reject_edges`).
     pub reject_edges: u32,
+    /// Word offset in the grid buffer of the pyramid's taps (see [`FrameLayout::grid_data`]).
+    pub taps: u32,
     /// Pads the struct to WGSL's 16-byte multiple.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
+}
+
+/// Appends the pyramid's taps to the grid buffer `g` and returns where they
+/// start (`Params::taps`, a multiple of 4): a header of a word per level
+/// (padded to a multiple of 4; level l >= 1 holds the offset of its table),
+/// then per level l >= 1 the taps of its columns `0 .. packed_pitch(w_l)`
+/// (those past the width repeat the last column's) and of its rows `0 ..
+/// h_l`, padded to a multiple of 4, each `s | w << 16` for
+/// [`cpu::pyramid::tap`](crate::cpu::pyramid::tap)'s source index `s` and
+/// Q11 weight `w` (`s` < [`MAX_SIDE`](crate::image::MAX_SIDE), `w` <= 2048).
+/// shaders/pyramid.wgsl reads a walk's four columns, and four rows, a load.
+pub fn push_pyramid_taps(g: &mut Vec<u32>, sizes: &[(u32, u32)]) -> u32 {
+    use crate::cpu::pyramid::tap;
+    let pad = |g: &mut Vec<u32>| g.resize(g.len().next_multiple_of(4), 0);
+    let word = |(s, w): (u32, i32)| s | (w as u32) << 16;
+    pad(g);
+    let at = g.len();
+    g.resize(at + sizes.len().next_multiple_of(4), 0);
+    for l in 1..sizes.len() {
+        let ((sw, sh), (dw, dh)) = (sizes[l - 1], sizes[l]);
+        g[at + l] = g.len() as u32;
+        g.extend((0..packed_pitch(dw)).map(|x| word(tap(x.min(dw - 1), sw, dw))));
+        g.extend((0..dh).map(|y| word(tap(y, sh, dh))));
+        pad(g);
+    }
+    at as u32
 }
 
 /// The layout of one frame size under one config.
@@ -115,7 +143,8 @@ pub struct FrameLayout {
     /// before each of them in that order (`n_levels + 1` words: 0, ...,
     /// [`total_cells`](Self::total_cells)), and each level's cell cuts `cx`,
     /// `cy` ([`cell_cuts`]), each followed by its cells' window ranges
-    /// ([`holding`]).
+    /// ([`holding`]); then, from `params.taps`, the pyramid's taps
+    /// ([`push_pyramid_taps`]).
     pub grid_data: Vec<u32>,
     /// The cells of all levels: local_threshold's `cells` workgroups, one
     /// per cell.
@@ -212,6 +241,7 @@ impl FrameLayout {
             total_cells += level_cells[l as usize];
         }
         grid_data[before + order.len()] = total_cells;
+        p.taps = push_pyramid_taps(&mut grid_data, &sizes);
         for (l, q) in level_quotas(cfg.n_features, &sizes).into_iter().enumerate() {
             p.quotas[l / 4][l % 4] = q;
         }
@@ -556,6 +586,56 @@ mod tests {
         assert!(l.capacity >= 303 * 86);
         let tiny = FrameLayout::new(&cfg, 20, 20);
         assert_eq!(tiny.capacity, 1, "no level has room for a corner; one slot is kept");
+    }
+
+    /// Reads the pyramid's taps as shaders/pyramid.wgsl does (a level's
+    /// table from the header at `params.taps`, a walk's four columns and
+    /// four rows a vec4 from 4-aligned offsets) and checks each against
+    /// cpu::pyramid::tap; the grid buffer's allocation holds the whole data.
+    #[test]
+    fn the_pyramid_taps_are_the_cpus() {
+        use crate::cpu::pyramid::tap;
+        for (w, h, n_levels, scale_factor) in
+            [(1241, 376, 8, 1.2), (37, 29, 4, 1.2), (3840, 2160, 12, 1.2), (97, 33, 3, 2.0), (5, 7, 3, 1.05)]
+        {
+            let cfg = Config { n_levels, scale_factor, ..Config::default() };
+            let l = FrameLayout::new(&cfg, w, h);
+            let g = &l.grid_data;
+            let t = l.params.taps as usize;
+            assert_eq!(t % 4, 0);
+            assert!(crate::gpu::buffers::Allocated::of(&l).grid >= g.len() as u64, "{w}x{h}: grid bound");
+            for lev in 1..l.sizes.len() {
+                let ((sw, sh), (dw, dh)) = (l.sizes[lev - 1], l.sizes[lev]);
+                let tc = g[t + lev] as usize;
+                assert_eq!(tc % 4, 0, "{w}x{h} level {lev}");
+                let rows = tc + packed_pitch(dw) as usize;
+                let unpack = |v: u32| (v & 0xffff, (v >> 16) as i32);
+                for x0 in (0..dw).step_by(4) {
+                    let quad = &g[tc + x0 as usize..][..4];
+                    for k in 0..4 {
+                        assert_eq!(
+                            unpack(quad[k]),
+                            tap((x0 + k as u32).min(dw - 1), sw, dw),
+                            "{w}x{h} level {lev} column {}",
+                            x0 + k as u32
+                        );
+                    }
+                }
+                for y0 in (0..dh).step_by(4) {
+                    let quad = &g[rows + y0 as usize..][..4];
+                    for k in 0..4u32 {
+                        if y0 + k < dh {
+                            assert_eq!(
+                                unpack(quad[k as usize]),
+                                tap(y0 + k, sh, dh),
+                                "{w}x{h} level {lev} row {}",
+                                y0 + k
+                            );
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// Decodes workgroup index `t` of local_threshold's `cells` as the shader

@@ -11,8 +11,14 @@ use crate::image::MAX_SIDE;
 /// The shader source (without the common prelude).
 pub const SOURCE: &str = include_str!("../../shaders/pyramid.wgsl");
 /// Its bindings.
-pub const BINDINGS: &[Binding] =
-    &[PARAMS, b(1, "level_index", Slot::UniformDynamic), b(2, "gray", Slot::ReadWrite), b(3, "gray4", Slot::ReadWrite)];
+pub const BINDINGS: &[Binding] = &[
+    PARAMS,
+    b(1, "level_index", Slot::UniformDynamic),
+    b(2, "gray", Slot::ReadWrite),
+    b(3, "gray4", Slot::ReadWrite),
+    b(4, "grid", Slot::Read),
+    b(5, "grid4", Slot::Read),
+];
 
 /// The pyramid pass.
 #[derive(Debug)]
@@ -39,8 +45,17 @@ impl Pass for PyramidPass {
                 reason: format!("a side exceeds the limit of {MAX_SIDE} pixels"),
             });
         }
-        self.kernel
-            .bind(device, &[("P", &b.params), ("level_index", &b.level_index), ("gray", &b.gray), ("gray4", &b.gray)])
+        self.kernel.bind(
+            device,
+            &[
+                ("P", &b.params),
+                ("level_index", &b.level_index),
+                ("gray", &b.gray),
+                ("gray4", &b.gray),
+                ("grid", &b.grid),
+                ("grid4", &b.grid),
+            ],
+        )
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &wgpu::BindGroup, b: &Buffers) {
