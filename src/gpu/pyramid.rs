@@ -34,8 +34,8 @@ impl Pass for PyramidPass {
         Self { kernel: Kernel::new(device, Self::NAME, SOURCE, "main", BINDINGS) }
     }
 
-    /// Fails for a level 0 side over [`MAX_SIDE`]: the shader's 32-bit tap
-    /// arithmetic is exact up to that size.
+    /// Fails for a level 0 side over [`MAX_SIDE`]: the taps' table holds a
+    /// source index in 16 bits (`layout::push_pyramid_taps`).
     fn bind(&self, device: &wgpu::Device, b: &Buffers) -> Result<wgpu::BindGroup> {
         let (w, h) = b.size();
         if w > MAX_SIDE || h > MAX_SIDE {
