@@ -2,7 +2,8 @@
 // Mirrors src/cpu/local_threshold.rs: the windows' histograms of M8 =
 // min(M, 255) are sums of the histograms of the cells cut at every window
 // edge (spec::cell_cuts), so each pixel is counted once, not once per window
-// holding it. m (M8, column-packed, common.wgsl pk_word) + grid -> window_hist -> windows[(first window of l + j*nx + i)
+// holding it. m (M8, column-packed, common.wgsl pk_word) + grid -> cell_hist
+// (each cell's bins; gpu::local_threshold::cell_words) -> windows[(first window of l + j*nx + i)
 // * 4 + {0: min, 1: max, 2: lower median, 3: V3}], and SPEC 4's per-level
 // histogram hist[l * 256 + M8] (the cells partition the level, so summing
 // their bins counts every pixel once: histogram.wgsl's result, without a
@@ -11,9 +12,14 @@
 //   levels' cells one after another in the order of
 //   gpu::layout::halves_order (llvmpipe gives each thread a contiguous share
 //   of the workgroups: in level order the first of two had 80% of the
-//   pixels), each level's row by row; it counts the cell in workgroup memory
-//   and adds each bin to every window holding the cell and to the level's
-//   histogram. (Dispatched as most cells along x, along y, and a level per z,
+//   pixels), each level's row by row; it counts the cell in workgroup memory,
+//   stores its non-empty bins in `cell_hist` (cell t at t * cw: cw = 128
+//   words of two 16-bit counts where no cell can pass 65535 pixels, else 256,
+//   gpu::layout::cell_bin_words) and each invocation's lowest and highest
+//   non-empty bin (after every cell's bins), and adds each bin to the
+//   level's histogram. (Added with atomics to each of the up to four windows
+//   holding the cell, the bins took a fifth of the pass on lavapipe, which
+//   runs an atomic lane by lane.) (Dispatched as most cells along x, along y, and a level per z,
 //   a KITTI frame's 2055 cells took 2888 workgroups; each idle one cost
 //   lavapipe ~1.2 us, ~1 ms of the pass's ~4.1.)
 //   CELL_INVOCATIONS (8) invocations: a KITTI cell is ~120x40 pixels at
@@ -22,21 +28,28 @@
 //   every SIMD group of a workgroup on lavapipe: one invocation per bin
 //   (256) took 57 ms per frame, 32 took 8.8 ms, 8 (one SIMD group) 7.2.
 // - stats: one invocation per window (64 a workgroup, dispatched over the
-//   windows of all levels): stats_of over the window's histogram.
+//   windows of all levels): stats_of over the sum of the histograms of the
+//   cells that make up the window (gpu::layout::covering), walked a load of
+//   four or eight bins at a time from the window's lowest bin to its median.
 // Groups beyond the last cell and invocations beyond the last window
-// return at once. `window_hist` and
+// return at once. `cell_hist` (the frame's cells' bins) and
 // `hist` are cleared by the pass before it runs.
 // Tests: tests/gpu_edges_front.rs (this pass alone == src/cpu/local_threshold.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
-// Races: the workgroup bins, the level histograms and the window histograms
-// are written with atomicAdd only; stats stores the four words of window t
-// from invocation t only.
+// Races: the workgroup bins and the level histograms are written with
+// atomicAdd only; invocation li of the workgroup of cell t writes only cell
+// t's bins li + 8 j (with atomicOr into a zeroed word where two 16-bit counts
+// share it, so the other half is kept) and its own extent word; stats, a
+// dispatch of its own, only reads `cell_hist` and stores the four words of
+// window t from invocation t only.
 
 @group(0) @binding(1) var<storage, read> m: array<u32>;
 @group(0) @binding(2) var<storage, read> grid: array<u32>;
 @group(0) @binding(3) var<storage, read_write> windows: array<u32>;
-@group(0) @binding(4) var<storage, read_write> window_hist: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> cell_hist: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> hist: array<atomic<u32>>;
+// `cell_hist` again, four words a load (stats)
+@group(0) @binding(6) var<storage, read_write> cell_hist4: array<vec4<u32>>;
 
 // Zero at the start of a workgroup (WGSL zero-initialises workgroup memory).
 var<workgroup> bins: array<atomic<u32>, 256>;
@@ -181,11 +194,6 @@ fn cells(
     let x1 = grid[cxo + cx + 1u];
     let y0 = grid[cyo + cy];
     let y1 = grid[cyo + cy + 1u];
-    let g = P.grids[l];
-    // the windows holding the cell (gpu::layout::holding, after each axis's
-    // cuts): looked up, where a search over the origins cost ~0.3 ms per frame
-    let wx = grid[cxo + ncx + 1u + cx];
-    let wy = grid[cyo + ncy + 1u + cy];
     // Columns li, li + 8, ... of the cell, each down its rows a word (four
     // rows, `m` is column-packed) at a time. Values below 32 (~96% of the
     // pixels of a KITTI frame) are counted in registers, bit-sliced
@@ -239,7 +247,6 @@ fn cells(
     planes[2u * li + 1u] = sl.hi;
     workgroupBarrier();
     let small = small_counts(li);
-    let r = vec4<u32>(wx & 0xffffu, wx >> 16u, wy & 0xffffu, wy >> 16u);
     // bins li, li + 8, ...: the non-empty ones as bits, added in a `while`
     // loop (most of a small or flat cell's bins are empty)
     // (256 / CELL_INVOCATIONS = 32 bits). Loops bounded by `li` here and in
@@ -251,28 +258,37 @@ fn cells(
     for (var k = li; k < 256u; k += CELL_INVOCATIONS) {
         full |= select(0u, 1u << ((k - li) / CELL_INVOCATIONS), atomicLoad(&bins[k]) != 0u);
     }
+    // this invocation's lowest and highest non-empty bin (256 and 0: none),
+    // after the bins of every cell of the frame (cw words each)
+    let cw = grid[before + P.n_levels + 1u];
+    let lo = select(256u, li + CELL_INVOCATIONS * firstTrailingBit(full), full != 0u);
+    let hi = select(0u, li + CELL_INVOCATIONS * firstLeadingBit(full), full != 0u);
+    atomicStore(&cell_hist[grid[before + P.n_levels] * cw + t * CELL_INVOCATIONS + li], lo | (hi << 16u));
     while (full != 0u) {
         let j = firstTrailingBit(full);
         let k = li + CELL_INVOCATIONS * j;
         full &= full - 1u;
         let c = atomicLoad(&bins[k]) + select(0u, small[min(j, 3u)], j < 4u);
         atomicAdd(&hist[l * 256u + k], c);
-        for (var iy = r.z; iy < r.w; iy++) {
-            for (var ix = r.x; ix < r.y; ix++) {
-                atomicAdd(&window_hist[(P.levels[l].w + iy * g.x + ix) * 256u + k], c);
-            }
+        if (cw == 256u) {
+            atomicStore(&cell_hist[t * 256u + k], c);
+        } else {
+            atomicOr(&cell_hist[t * 128u + (k >> 1u)], c << (16u * (k & 1u)));
         }
     }
 }
 
 // One invocation per window, t = the window's index over all levels
 // (P.levels[l].w is level l's first), 64 a workgroup, no workgroup memory
-// and no barrier: stats_of in src/cpu/local_threshold.rs over the window's
-// histogram, bin by bin. The walk stops once it has counted the window's
-// a*b pixels (every bin after is empty). A workgroup per window, its 8
+// and no barrier: stats_of in src/cpu/local_threshold.rs over the sum of the
+// histograms of the cells that make up the window (cells rx.x .. rx.y along
+// x, ry.x .. ry.y along y, gpu::layout::covering). Its lowest and highest
+// bin are those of its cells' invocations (their extent words); the walk for
+// the lower median takes a load (four or eight bins) of each cell at a time,
+// from the load of the lowest bin on, and stops at the median. (A workgroup per window, its 8
 // invocations summing runs of bins for one to walk, took ~0.7 ms per KITTI
-// frame on lavapipe: each of ~720 workgroups paid its barrier and
-// workgroup memory.
+// frame on lavapipe: each of ~720 workgroups paid its barrier and workgroup
+// memory.)
 @compute @workgroup_size(64, 1, 1)
 fn stats(@builtin(global_invocation_id) id: vec3<u32>) {
     let t = id.x;
@@ -286,22 +302,78 @@ fn stats(@builtin(global_invocation_id) id: vec3<u32>) {
     // running count passes (n - 1) / 2
     let n = (g.w & 0xffffu) * (g.w >> 16u);
     let half = (max(n, 1u) - 1u) / 2u;  // `target` on the CPU (a WGSL keyword)
-    let base = t * 256u;
-    var acc = 0u;
+    let wi = t - P.levels[l].w;
+    let iy = wi / g.x;
+    let ix = wi - iy * g.x;
+    let hdr = P.cells + 4u * l;
+    let ncx = grid[hdr + 1u];
+    let rx = grid[grid[hdr] + ncx + 1u + ix];
+    let ry = grid[grid[hdr + 2u] + grid[hdr + 3u] + 1u + iy];
+    let x0 = rx & 0xffffu;
+    let x1 = rx >> 16u;
+    let y0 = ry & 0xffffu;
+    let y1 = ry >> 16u;
+    // level l's first cell in the order of the `cells` dispatch
+    let order = P.cells + 4u * P.n_levels;
+    let before = order + P.n_levels;
+    var first = 0u;
+    for (var z = 0u; z < P.n_levels; z++) {
+        if (grid[order + z] == l) { first = grid[before + z]; }
+    }
+    // the extent words, two loads a cell, after the frame's cells' bins (cw
+    // words, q4 = cw / 4 loads, a cell)
+    let cw = grid[before + P.n_levels + 1u];
+    let q4 = cw / 4u;
+    let ext = grid[before + P.n_levels] * q4;
     var lo = 256u;
     var hi = 0u;
-    var median = 256u;
-    // bounded by `base`: a constant trip count is unrolled by lavapipe's compiler
-    for (var k = base; k < base + 256u && acc < n; k++) {
-        let c = atomicLoad(&window_hist[k]);
-        let bin = k - base;
-        lo = select(lo, bin, c != 0u && lo == 256u);
-        hi = select(hi, bin, c != 0u);
-        acc += c;
-        median = select(median, bin, acc > half && median == 256u);
+    for (var cy = y0; cy < y1; cy++) {
+        for (var cx = x0; cx < x1; cx++) {
+            let c = first + cy * ncx + cx;
+            let e = cell_hist4[ext + 2u * c];
+            let f = cell_hist4[ext + 2u * c + 1u];
+            let a = min(e & vec4<u32>(0xffffu), f & vec4<u32>(0xffffu));
+            let b = max(e >> vec4<u32>(16u), f >> vec4<u32>(16u));
+            lo = min(lo, min(min(a.x, a.y), min(a.z, a.w)));
+            hi = max(hi, max(max(b.x, b.y), max(b.z, b.w)));
+        }
     }
-    // a window holds a*b >= 1 pixels, so the count passes `half` by bin 255
+    // a window holds a*b >= 1 pixels, so lo <= 255 and the count passes
+    // `half` by bin 255; the bins of lo's load below lo are empty. A load
+    // holds bins 4 q .. 4 q + 3 (cw = 256) or 8 q .. 8 q + 7 as 16-bit
+    // counts, the even bins in the low halves (summed apart: a window's sum
+    // may pass 65535).
+    let per = 256u / q4;  // bins a load
+    var acc = 0u;
+    var median = 256u;
+    for (var q = min(lo, 255u) / per; q < q4 && median == 256u; q++) {
+        var s = vec4<u32>(0u);  // bins per, per + 1 (cw = 128), per + 2, per + 3 of the load
+        var u = vec4<u32>(0u);  // the odd bins of a load of 16-bit counts
+        for (var cy = y0; cy < y1; cy++) {
+            for (var cx = x0; cx < x1; cx++) {
+                let v = cell_hist4[(first + cy * ncx + cx) * q4 + q];
+                if (cw == 256u) {
+                    s += v;
+                } else {
+                    s += v & vec4<u32>(0xffffu);
+                    u += v >> vec4<u32>(16u);
+                }
+            }
+        }
+        // the counts in bin order: c[i] is bin per * q + i
+        var c: array<u32, 8>;
+        if (cw == 256u) {
+            c = array<u32, 8>(s.x, s.y, s.z, s.w, 0u, 0u, 0u, 0u);
+        } else {
+            c = array<u32, 8>(s.x, u.x, s.y, u.y, s.z, u.z, s.w, u.w);
+        }
+        for (var i = 0u; i < per; i++) {
+            acc += c[i];
+            median = select(median, per * q + i, acc > half && median == 256u);
+        }
+    }
     median = min(median, 255u);
+    lo = min(lo, 255u);
     let o = t * 4u;
     windows[o] = lo;
     windows[o + 1u] = hi;

@@ -563,6 +563,40 @@ fn local_threshold_counts_large_cells() {
     assert_eq!(&t::download(&ctx, &b.hist).unwrap()[..256], &cpu::histogram::histogram(&m)[..], "level histogram");
 }
 
+/// `cell_hist` holds two 16-bit counts a word where no cell can pass 65535
+/// pixels (gpu::layout::cell_bin_words), else a count a word: a 2540x2540
+/// level (cells of up to 254x254 = 64516 pixels, 16-bit, whose windows' sums
+/// pass 65535) and a 2600x2600 one (260x260 = 67600, 32-bit), each almost
+/// all one value, so one bin of a cell nearly fills or passes 16 bits.
+#[test]
+fn local_threshold_counts_cells_near_and_past_16_bits() {
+    let Some(ctx) = t::context() else { return };
+    let pass = LocalThresholdPass::new(&ctx.device);
+    let cfg = Config { n_levels: 1, ..Config::default() };
+    for (side, words) in [(2540u32, 128u32), (2600, 256)] {
+        assert_eq!(lfast::gpu::layout::cell_bin_words(side, side), words);
+        let mut r = Rng::new(side as u64);
+        let m = Plane::<u16>::from_vec(
+            side,
+            side,
+            (0..side * side).map(|_| if r.below_u64(100) == 0 { r.below_u64(400) as u16 } else { 5 }).collect(),
+        )
+        .unwrap();
+        let b = Buffers::new(&ctx.device, &cfg, side, side).unwrap();
+        t::upload_packed(&ctx, &b, &b.m, 0, &m8(&m));
+        t::run(&ctx, &pass, &b).unwrap();
+        let g = cpu::local_threshold::local_threshold(&m);
+        let want: Vec<u32> =
+            g.stats.iter().flat_map(|s| [s.min as u32, s.max as u32, s.median as u32, s.v3()]).collect();
+        assert_eq!(&t::download(&ctx, &b.windows).unwrap()[..want.len()], &want[..], "{side}: window statistics");
+        assert_eq!(
+            &t::download(&ctx, &b.hist).unwrap()[..256],
+            &cpu::histogram::histogram(&m)[..],
+            "{side}: histogram"
+        );
+    }
+}
+
 #[test]
 fn classify_matches_cpu() {
     let Some(ctx) = t::context() else { return };

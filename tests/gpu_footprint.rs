@@ -30,7 +30,7 @@ fn fields(b: &Buffers) -> Vec<(&'static str, &wgpu::Buffer)> {
         ("otsu", &b.otsu),
         ("grid", &b.grid),
         ("windows", &b.windows),
-        ("window_hist", &b.window_hist),
+        ("cell_hist", &b.cell_hist),
         ("classes", &b.classes),
         ("ruled", &b.ruled),
         ("walks", &b.walks),

@@ -9,6 +9,7 @@ use crate::config::Config;
 use crate::error::{Error, Result};
 use crate::spec::angle::AngleBins;
 use crate::spec::pattern::{Pattern, RotatedPatterns};
+use crate::spec::windows::MAX_CELLS_PER_AXIS;
 use bytemuck::{Pod, Zeroable};
 
 /// One keypoint as the GPU stores it (48 bytes; `shaders/select.wgsl`'s `Kp`).
@@ -63,8 +64,8 @@ pub(crate) const SHARED_PACKED: &str = "m = smooth";
 pub(crate) const SHARED_ATLAS: &str = "labels = edge_list = resp = ranks";
 /// The label of the allocation `classes` and `cand` share.
 pub(crate) const SHARED_CLASSES: &str = "classes = cand";
-/// The label of the allocation `window_hist` and `corners` share.
-pub(crate) const SHARED_CORNERS: &str = "window_hist = corners";
+/// The label of the allocation `cell_hist` and `corners` share.
+pub(crate) const SHARED_CORNERS: &str = "cell_hist = corners";
 /// The label of the allocation `cand_list` and `sel_members` share.
 pub(crate) const SHARED_LIST: &str = "cand_list = sel_members";
 /// Bytes of [`Buffers::mask`] until a mask is set.
@@ -163,6 +164,10 @@ pub struct Allocated {
     pub keypoints: u64,
     /// Windows.
     pub windows: u64,
+    /// Words of local_threshold's `cell_hist`: the most SPEC 5 cells any
+    /// level of at most its size can have, by
+    /// [`cell_words`](super::local_threshold::cell_words).
+    pub cell_words: u64,
     /// Words of the grid buffer.
     pub grid: u64,
     /// Bytes of the input buffer.
@@ -177,8 +182,9 @@ impl Allocated {
     pub(crate) fn of(layout: &FrameLayout) -> Self {
         let (w, h) = layout.sizes[0];
         let levels = layout.n_levels() as u64;
-        // Windows and grid sized for the most windows any level can have, so a
+        // Windows, cells and grid sized for the most any level can have, so a
         // smaller frame (which may have more, smaller windows) still fits.
+        let max_cells = |len: u32| (len as u64).min(MAX_CELLS_PER_AXIS as u64);
         let per_level = (MAX_WINDOWS_PER_AXIS * MAX_WINDOWS_PER_AXIS) as u64;
         let sides: u64 = layout.sizes.iter().map(|&(w, h)| w as u64 + h as u64).sum();
         Self {
@@ -186,8 +192,12 @@ impl Allocated {
             packed: layout.total_packed as u64,
             keypoints: layout.capacity as u64,
             windows: levels * per_level,
+            cell_words: layout.sizes.iter().map(|&(w, h)| max_cells(w) * max_cells(h)).sum::<u64>()
+                * super::local_threshold::cell_words(w, h),
             // xs, ys, then per level a cell header, at most 2 cuts per window
-            // and 2 more per axis, and a window range per cell; the
+            // and 2 more per axis, and a cell range per window (fewer than
+            // one per cell); the order and cells before each level, and the
+            // words of a cell's bins; the
             // pyramid's taps, a word per column and row of a level past the
             // first, each level's and the header padded to 4 words
             grid: sides
@@ -195,7 +205,7 @@ impl Allocated {
                 + levels * (4 + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 2) + 2 * (2 * MAX_WINDOWS_PER_AXIS as u64 + 1))
                 + sides
                 + levels * 10
-                + 6,
+                + 7,
             input: (w as u64 * h as u64).next_multiple_of(4),
             levels: layout.n_levels() as u64,
             tiles: layout.params.total_tiles as u64,
@@ -208,6 +218,7 @@ impl Allocated {
             && self.packed >= other.packed
             && self.keypoints >= other.keypoints
             && self.windows >= other.windows
+            && self.cell_words >= other.cell_words
             && self.grid >= other.grid
             && self.input >= other.input
             && self.levels >= other.levels
@@ -266,10 +277,12 @@ pub struct Buffers {
     pub grid: wgpu::Buffer,
     /// Per window min, max, median, V3.
     pub windows: wgpu::Buffer,
-    /// Per window a 256-bin histogram of M8, summed from its cells (SPEC 5).
+    /// Per SPEC 5 cell its 256-bin histogram of M8, then per cell each
+    /// `cells` invocation's lowest and highest non-empty bin
+    /// ([`CELL_WORDS`](super::local_threshold::CELL_WORDS) words a cell).
     ///
     /// One allocation with `corners` (their stages never overlap; [`footprint`](super::footprint)).
-    pub window_hist: wgpu::Buffer,
+    pub cell_hist: wgpu::Buffer,
     /// SPEC 6 classes, column-packed (four rows of a column per word, see
     /// [`FrameLayout::packed_offsets`](super::FrameLayout::packed_offsets)).
     ///
@@ -320,7 +333,7 @@ pub struct Buffers {
     pub resp: wgpu::Buffer,
     /// Corners surviving corner NMS, unordered ([`GpuKeypoint`]s).
     ///
-    /// One allocation with `window_hist` (their stages never overlap; [`footprint`](super::footprint)).
+    /// One allocation with `cell_hist` (their stages never overlap; [`footprint`](super::footprint)).
     pub corners: wgpu::Buffer,
     /// Per corner its select record: order key, taken, level, `y << 16 | x`.
     ///
@@ -432,7 +445,7 @@ impl Buffers {
         // the response pass writes) and select's records;
         // the candidate list (lfast to snap) and select's buckets' members;
         // the classes (classify to rules) and the L-FAST candidates (lfast to
-        // corner NMS; cleared right before lfast, Pass::clear_before); the windows' histograms
+        // corner NMS; cleared right before lfast, Pass::clear_before); the cells' histograms
         // (local_threshold, which zeroes them before the frame) and the corners
         // (corner NMS to select).
         let m_smooth = packed(SHARED_PACKED);
@@ -480,7 +493,7 @@ impl Buffers {
             otsu: buf("otsu", sizes.otsu),
             grid: init("grid", bytemuck::cast_slice(&grid), storage),
             windows: buf("windows", sizes.windows),
-            window_hist: hist_corners.clone(),
+            cell_hist: hist_corners.clone(),
             classes: cand.clone(),
             ruled: buf("ruled", sizes.tiles),
             walks: buf("walks", sizes.walks),

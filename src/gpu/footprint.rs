@@ -38,7 +38,7 @@ pub(crate) struct Sizes {
     /// Four words per window.
     pub windows: u64,
     /// 256 bins per window.
-    pub window_hist: u64,
+    pub cell_hist: u64,
     /// A [`GpuKeypoint`](super::GpuKeypoint) per corner slot (`corners`).
     pub corners: u64,
     /// Four words per corner slot (`ranks`, `sel_members`).
@@ -84,7 +84,7 @@ impl Sizes {
             otsu: 4 * a.levels,
             grid: 4 * (a.grid as usize).max(layout.grid_data.len()).max(4) as u64,
             windows: 16 * a.windows,
-            window_hist: 1024 * a.windows,
+            cell_hist: 4 * a.cell_words,
             corners: cap * KP_WORDS * 4,
             records: cap * 16,
             keypoints: slots * KP_WORDS * 4,
@@ -143,9 +143,9 @@ impl Sizes {
         self.atlas.max(self.records)
     }
 
-    /// The allocation `window_hist` and `corners` share.
+    /// The allocation `cell_hist` and `corners` share.
     pub(crate) fn shared_corners(&self) -> u64 {
-        self.window_hist.max(self.corners)
+        self.cell_hist.max(self.corners)
     }
 
     /// The report of a `width x height` frame laid out into these sizes.
@@ -162,7 +162,7 @@ impl Sizes {
     /// The largest buffer bound as storage: what `max_storage_buffer_binding_size` and
     /// `max_buffer_size` must allow.
     pub(crate) fn largest_storage(&self) -> u64 {
-        self.atlas.max(self.corners).max(self.window_hist)
+        self.atlas.max(self.corners).max(self.cell_hist)
     }
 }
 

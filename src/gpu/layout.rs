@@ -141,9 +141,10 @@ pub struct FrameLayout {
     /// offset of cy, cells along y]`, the levels in the order of
     /// local_threshold's `cells` dispatch ([`halves_order`]), the cells
     /// before each of them in that order (`n_levels + 1` words: 0, ...,
-    /// [`total_cells`](Self::total_cells)), and each level's cell cuts `cx`,
-    /// `cy` ([`cell_cuts`]), each followed by its cells' window ranges
-    /// ([`holding`]); then, from `params.taps`, the pyramid's taps
+    /// [`total_cells`](Self::total_cells)), the words of a cell's bins
+    /// ([`cell_bin_words`]), and each level's cell cuts `cx`,
+    /// `cy` ([`cell_cuts`]), each followed by the cell range of each of its
+    /// windows ([`covering`]); then, from `params.taps`, the pyramid's taps
     /// ([`push_pyramid_taps`]).
     pub grid_data: Vec<u32>,
     /// The cells of all levels: local_threshold's `cells` workgroups, one
@@ -208,8 +209,8 @@ impl FrameLayout {
         let capacity = capacity.clamp(1, u32::MAX as u64 / 64) as u32;
         // The cells: per level a header (offset of the x cuts, cells along x,
         // offset of the y cuts, cells along y), then each level's cuts, each
-        // axis's followed by the range of windows holding each of its cells
-        // (`holding`).
+        // axis's followed by the range of cells that make up each of its
+        // windows (`covering`).
         p.cells = grid_data.len() as u32;
         let cells_data = 4 * grids.len();
         grid_data.resize(grid_data.len() + cells_data, 0);
@@ -219,7 +220,8 @@ impl FrameLayout {
         let order = halves_order(&px);
         grid_data.extend(&order);
         let before = grid_data.len();
-        grid_data.resize(before + order.len() + 1, 0);
+        grid_data.resize(before + order.len() + 2, 0);
+        grid_data[before + order.len() + 1] = cell_bin_words(width, height);
         let mut level_cells = Vec::with_capacity(sizes.len());
         for (l, (g, &(w, h))) in grids.iter().zip(&sizes).enumerate() {
             let (cx, cy) = (cell_cuts(&g.xs, g.a, w), cell_cuts(&g.ys, g.b, h));
@@ -229,11 +231,11 @@ impl FrameLayout {
             grid_data[hdr] = grid_data.len() as u32;
             grid_data[hdr + 1] = ncx;
             grid_data.extend_from_slice(&cx);
-            grid_data.extend(cx.windows(2).map(|c| holding(&g.xs, g.a, c[0], c[1])));
+            grid_data.extend(g.xs.iter().map(|&o| covering(&cx, o, g.a)));
             grid_data[hdr + 2] = grid_data.len() as u32;
             grid_data[hdr + 3] = ncy;
             grid_data.extend_from_slice(&cy);
-            grid_data.extend(cy.windows(2).map(|c| holding(&g.ys, g.b, c[0], c[1])));
+            grid_data.extend(g.ys.iter().map(|&o| covering(&cy, o, g.b)));
         }
         let mut total_cells = 0u32;
         for (z, &l) in order.iter().enumerate() {
@@ -367,25 +369,42 @@ impl FrameLayout {
     }
 }
 
-/// The windows of origins `origins` (sorted, all of size `size`) that hold
-/// the cell `[c0, c1)`, as `first | end << 16` (one range; `first == end ==
-/// origins.len()` when none does): the windows local_threshold's `cells` adds
-/// the cell's bins to.
+/// Words of a cell's bins in local_threshold's `cell_hist` for a frame
+/// whose level 0 is `w x h`: 128 (two 16-bit counts a word) when no cell of
+/// any level can hold more than 65535 pixels, else 256. A cell lies between
+/// consecutive cuts, which are at most a window stride `max(1, a/2)` apart
+/// (the origins are, and each window edge is an origin plus `a`), and level
+/// 0 has the largest strides; a smaller frame never needs more.
 ///
 /// ```
-/// use lfast::gpu::layout::holding;
+/// use lfast::gpu::layout::cell_bin_words;
+/// assert_eq!(cell_bin_words(1241, 376), 128); // cells of at most 124 x 37
+/// assert_eq!(cell_bin_words(3840, 2160), 256); // 384 x 216 > 65535
+/// ```
+pub fn cell_bin_words(w: u32, h: u32) -> u32 {
+    let stride = |len: u32| ((len / 5).max(1) / 2).max(1) as u64;
+    if stride(w) * stride(h) <= u16::MAX as u64 { 128 } else { 256 }
+}
+
+/// The cells (between consecutive `cuts`, sorted, as made by
+/// [`cell_cuts`]) that make up the window `[origin, origin + size)`, as
+/// `first | end << 16`: local_threshold's `stats` sums their counts. The
+/// cuts hold every window edge, so the window is exactly cells `first ..
+/// end`.
+///
+/// ```
+/// use lfast::gpu::layout::covering;
 /// // KITTI width 1241: windows of 248 at 0, 124, ..., 992, 993
 /// let xs = lfast::spec::window_origins(1241, 248);
-/// assert_eq!(holding(&xs, 248, 124, 248), 0 | (2 << 16)); // windows 0 and 1
-/// assert_eq!(holding(&xs, 248, 992, 993), 7 | (9 << 16)); // 7 and 8, not the flush window 9
+/// let cuts = lfast::spec::cell_cuts(&xs, 248, 1241);
+/// assert_eq!(&cuts[..4], &[0, 124, 248, 372]);
+/// assert_eq!(covering(&cuts, 124, 248), 1 | (3 << 16)); // cells 124..248, 248..372
+/// assert_eq!(&cuts[8..], &[992, 993, 1116, 1240, 1241]);
+/// assert_eq!(covering(&cuts, 992, 248), 8 | (11 << 16)); // 992..993, 993..1116, 1116..1240
 /// ```
-pub fn holding(origins: &[u32], size: u32, c0: u32, c1: u32) -> u32 {
-    let n = origins.len() as u32;
-    let holds = |&o: &u32| o <= c0 && c1 <= o + size;
-    match (origins.iter().position(holds), origins.iter().rposition(holds)) {
-        (Some(first), Some(last)) => first as u32 | ((last as u32 + 1) << 16),
-        _ => n | (n << 16),
-    }
+pub fn covering(cuts: &[u32], origin: u32, size: u32) -> u32 {
+    let at = |c: u32| cuts.partition_point(|&x| x < c) as u32;
+    at(origin) | (at(origin + size) << 16)
 }
 
 /// The levels in an order whose first half (`ceil(n / 2)` levels) and second
@@ -394,8 +413,7 @@ pub fn holding(origins: &[u32], size: u32, c0: u32, c1: u32) -> u32 {
 /// splits a dispatch's workgroups into one contiguous share per thread, and
 /// shaders/local_threshold.wgsl's `cells` takes the levels' cells in this
 /// order: in level order the first of two threads had levels 0-3, 80% of the
-/// pixels, and this way most levels' windows stay with one thread (the shares
-/// add into disjoint window histograms). 5.00-5.59 -> 4.32-4.69 ms per KITTI
+/// pixels, and this way most levels' windows stay with one thread. 5.00-5.59 -> 4.32-4.69 ms per KITTI
 /// frame on two threads (`gpu_bench`, five alternated rounds).
 ///
 /// ```
@@ -650,6 +668,53 @@ mod tests {
         let ncx = g[l.params.cells as usize + 4 * lev as usize + 1];
         let c = t - g[before + z];
         (lev, c % ncx, c / ncx)
+    }
+
+    #[test]
+    fn sixteen_bit_cells_never_hold_more_than_65535_pixels() {
+        let mut both = [false; 2];
+        for (w, h) in
+            [(1241, 376), (3840, 2160), (2560, 2560), (2600, 2600), (2570, 2570), (1, 1), (16384, 40), (29, 16384)]
+        {
+            let l = FrameLayout::new(&Config::default(), w, h);
+            let narrow = cell_bin_words(w, h) == 128;
+            both[narrow as usize] = true;
+            let g = &l.grid_data;
+            let mut largest = 0u64;
+            for lev in 0..l.n_levels() as usize {
+                let hdr = l.params.cells as usize + 4 * lev;
+                let gaps =
+                    |at: u32, n: u32| g[at as usize..=(at + n) as usize].windows(2).map(|c| c[1] - c[0]).max().unwrap();
+                largest = largest.max(gaps(g[hdr], g[hdr + 1]) as u64 * gaps(g[hdr + 2], g[hdr + 3]) as u64);
+            }
+            assert!(!narrow || largest <= 65535, "{w}x{h}: a cell of {largest} pixels");
+        }
+        assert_eq!(both, [true, true]);
+    }
+
+    #[test]
+    fn each_window_is_the_cells_its_range_names() {
+        for (w, h, n_levels) in [(1241, 376, 8), (20, 20, 8), (1, 1, 1), (97, 33, 3), (3840, 2160, 12), (640, 480, 1)] {
+            let cfg = Config { n_levels, ..Config::default() };
+            let l = FrameLayout::new(&cfg, w, h);
+            let g = &l.grid_data;
+            for lev in 0..l.n_levels() as usize {
+                let (lw, lh) = l.sizes[lev];
+                let win = WindowLayout::new(lw, lh);
+                let hdr = l.params.cells as usize + 4 * lev;
+                for (axis, origins, size, len) in [(0, &win.xs, win.a, lw), (2, &win.ys, win.b, lh)] {
+                    let (at, n) = (g[hdr + axis] as usize, g[hdr + axis + 1] as usize);
+                    let cuts = &g[at..at + n + 1];
+                    assert_eq!((cuts[0], cuts[n]), (0, len), "{w}x{h} level {lev}");
+                    for (i, &o) in origins.iter().enumerate() {
+                        let r = g[at + n + 1 + i];
+                        let (first, end) = ((r & 0xffff) as usize, (r >> 16) as usize);
+                        assert!(first < end && end <= n, "{w}x{h} level {lev} window {i}: {first}..{end} of {n}");
+                        assert_eq!((cuts[first], cuts[end]), (o, o + size), "{w}x{h} level {lev} window {i}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! SPEC 5 on the GPU: shaders/local_threshold.wgsl, mirroring
-//! src/cpu/local_threshold.rs. `m` + `grid` -> `window_hist` (per-cell counts
-//! added to the windows holding each cell) -> `windows` (min, max, median, V3);
+//! src/cpu/local_threshold.rs. `m` + `grid` -> `cell_hist` (each cell's counts
+//! and its lanes' lowest and highest bins) -> `windows` (min, max, median, V3
+//! of the cells that make up each window);
 //! the cells' counts also make SPEC 4's per-level histogram `hist` (equal to
 //! [`histogram`](super::histogram)'s), which is why this pass runs before Otsu.
 
@@ -17,9 +18,18 @@ pub const BINDINGS: &[Binding] = &[
     b(1, "m", Slot::Read),
     b(2, "grid", Slot::Read),
     b(3, "windows", Slot::ReadWrite),
-    b(4, "window_hist", Slot::ReadWrite),
+    b(4, "cell_hist", Slot::ReadWrite),
     b(5, "hist", Slot::ReadWrite),
+    b(6, "cell_hist4", Slot::ReadWrite),
 ];
+
+/// Words of `cell_hist` per cell of a frame whose level 0 is `w x h`: its
+/// bins ([`cell_bin_words`](super::layout::cell_bin_words)), and a word per
+/// `cells` invocation (shaders/local_threshold.wgsl CELL_INVOCATIONS) with
+/// the lowest and highest non-empty bin of its share of the bins.
+pub fn cell_words(w: u32, h: u32) -> u64 {
+    super::layout::cell_bin_words(w, h) as u64 + 8
+}
 
 /// The window statistics pass: `cells`, then `stats`.
 #[derive(Debug)]
@@ -49,8 +59,9 @@ impl Pass for LocalThresholdPass {
                 ("m", &b.m),
                 ("grid", &b.grid),
                 ("windows", &b.windows),
-                ("window_hist", &b.window_hist),
+                ("cell_hist", &b.cell_hist),
                 ("hist", &b.hist),
+                ("cell_hist4", &b.cell_hist),
             ],
         )
     }
@@ -61,10 +72,12 @@ impl Pass for LocalThresholdPass {
     }
 
     fn prepare(&self, encoder: &mut wgpu::CommandEncoder, b: &Buffers) {
-        // `cells` adds into the window histograms: start from all zero (the
-        // frame's windows only; the buffer holds the most any frame could have).
-        let bytes = 1024 * b.layout.total_windows as u64;
-        encoder.clear_buffer(&b.window_hist, 0, Some(bytes.min(b.window_hist.size())));
+        // `cells` stores (or ORs in) each cell's non-empty bins only: the
+        // frame's cells' bins start from zero (their invocations' words are
+        // always stored).
+        let (w, h) = b.layout.sizes[0];
+        let bytes = 4 * super::layout::cell_bin_words(w, h) as u64 * b.layout.total_cells as u64;
+        encoder.clear_buffer(&b.cell_hist, 0, Some(bytes.min(b.cell_hist.size())));
         // ... and into the levels' histograms
         encoder.clear_buffer(&b.hist, 0, None);
     }

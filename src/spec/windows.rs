@@ -9,6 +9,11 @@
 /// L < 20 (17 at L = 19) and at most 11 from L = 20 on (a test checks every L).
 pub const MAX_WINDOWS_PER_AXIS: usize = 17;
 
+/// Most cells ([`cell_cuts`]) along one axis of any length L: L for L < 20
+/// (every position a cut), at most 25 beyond (first at L = 29; a test checks
+/// every L), so never more than `min(L, 25)`.
+pub const MAX_CELLS_PER_AXIS: usize = 25;
+
 /// The window layout of one `w x h` image (one pyramid level).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct WindowLayout {
@@ -141,6 +146,21 @@ mod tests {
         assert_eq!(window_origins(4, 1), vec![0, 1, 2, 3]);
         assert_eq!(window_origins(9, 1), (0..9).collect::<Vec<_>>());
         assert_eq!(window_origins(10, 2), (0..9).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn no_axis_has_more_than_max_cells() {
+        let cells = |l: u32| {
+            let a = (l / 5).max(1);
+            cell_cuts(&window_origins(l, a), a, l).len() - 1
+        };
+        let mut worst = 0;
+        for l in 1..=crate::image::MAX_SIDE {
+            let n = cells(l);
+            assert!(n <= (l as usize).min(MAX_CELLS_PER_AXIS), "{l}: {n} cells");
+            worst = worst.max(n);
+        }
+        assert_eq!(worst, MAX_CELLS_PER_AXIS);
     }
 
     #[test]
