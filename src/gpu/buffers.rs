@@ -277,9 +277,10 @@ pub struct Buffers {
     pub grid: wgpu::Buffer,
     /// Per window min, max, median, V3.
     pub windows: wgpu::Buffer,
-    /// Per SPEC 5 cell its 256-bin histogram of M8, then per cell each
-    /// `cells` invocation's lowest and highest non-empty bin
-    /// ([`CELL_WORDS`](super::local_threshold::CELL_WORDS) words a cell).
+    /// Per SPEC 5 cell its 256-bin histogram of M8 (16-bit counts, two a
+    /// word, up to 6.5 megapixels: [`cell_bin_words`](super::layout::cell_bin_words)),
+    /// then per cell each `cells` invocation's lowest and highest non-empty
+    /// bin ([`cell_words`](super::local_threshold::cell_words) words a cell).
     ///
     /// One allocation with `corners` (their stages never overlap; [`footprint`](super::footprint)).
     pub cell_hist: wgpu::Buffer,
