@@ -37,7 +37,8 @@ pub(crate) struct Sizes {
     pub grid: u64,
     /// Four words per window.
     pub windows: u64,
-    /// 256 bins per window.
+    /// Per SPEC 5 cell its bins and its invocations' extents, for the most
+    /// cells a smaller frame can have ([`Allocated::cell_words`]).
     pub cell_hist: u64,
     /// A [`GpuKeypoint`](super::GpuKeypoint) per corner slot (`corners`).
     pub corners: u64,

@@ -413,8 +413,9 @@ pub fn covering(cuts: &[u32], origin: u32, size: u32) -> u32 {
 /// splits a dispatch's workgroups into one contiguous share per thread, and
 /// shaders/local_threshold.wgsl's `cells` takes the levels' cells in this
 /// order: in level order the first of two threads had levels 0-3, 80% of the
-/// pixels, and this way most levels' windows stay with one thread. 5.00-5.59 -> 4.32-4.69 ms per KITTI
-/// frame on two threads (`gpu_bench`, five alternated rounds).
+/// pixels, and this way most levels' windows stay with one thread. 5.00-5.59
+/// -> 4.32-4.69 ms per KITTI frame on two threads (`gpu_bench`, five
+/// alternated rounds).
 ///
 /// ```
 /// use lfast::gpu::layout::halves_order;
