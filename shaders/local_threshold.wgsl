@@ -186,7 +186,6 @@ fn cells(
     let cxo = grid[hdr];
     let ncx = grid[hdr + 1u];
     let cyo = grid[hdr + 2u];
-    let ncy = grid[hdr + 3u];
     let c = t - grid[before + z];
     let cy = c / ncx;
     let cx = c - cy * ncx;
