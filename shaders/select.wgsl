@@ -172,10 +172,15 @@ fn spare() -> u32 {
     return select(0u, P.n_features - taken, P.n_features > taken);
 }
 
+// The args over a list of n corners or keypoints, an invocation each and
+// GROUP (= 64) a workgroup: list_args, within the device's workgroup-count
+// limit whatever n (lfast's own device does not have wgpu check indirect
+// args: src/gpu/context.rs).
 fn write_dispatch(at: u32, n: u32) {
-    indirect[at] = (n + GROUP - 1u) / GROUP;
-    indirect[at + 1u] = 1u;
-    indirect[at + 2u] = 1u;
+    let a = list_args(n);
+    indirect[at] = a.x;
+    indirect[at + 1u] = a.y;
+    indirect[at + 2u] = a.z;
 }
 
 @compute @workgroup_size(1)
@@ -200,13 +205,13 @@ fn uniform_count(li: u32) -> u32 {
 }
 
 @compute @workgroup_size(64)
-fn rank_level(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+fn rank_level(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     if (li == 0u) {
         atomicStore(&wg_max, 0u);
         atomicStore(&wg_min, 0xffffffffu);
     }
     let n = uniform_count(li);
-    let i = gid.x;
+    let i = list_index(wg, vec3(li, 0u, 0u));
     let live = i < n;
     var ki = 0u;
     var pi = vec3(0u);
@@ -247,8 +252,8 @@ fn rank_level(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invo
 }
 
 @compute @workgroup_size(64)
-fn count(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+fn count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let i = list_index(wg, li);
     if (i >= corner_count()) { return; }
     let r = ranks[i];
     let b = bucket_of(r.x);
@@ -288,8 +293,8 @@ fn scan(@builtin(local_invocation_index) li: u32) {
 }
 
 @compute @workgroup_size(64)
-fn scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+fn scatter(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let i = list_index(wg, li);
     if (i >= corner_count()) { return; }
     let r = ranks[i];
     let b = bucket_of(r.x);
@@ -298,8 +303,8 @@ fn scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 @compute @workgroup_size(64)
-fn place(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+fn place(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let i = list_index(wg, li);
     if (i >= corner_count()) { return; }
     let ri = ranks[i];
     let b = bucket_of(ri.x);

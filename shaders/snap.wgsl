@@ -27,10 +27,10 @@ const I_SNAP_CORNERS: u32 = 0u;
 // (as select.wgsl `args` writes it for its own passes over the corners).
 @compute @workgroup_size(1)
 fn snap_args() {
-    let n = min(counters[C_CORNERS], P.capacity);
-    indirect[I_SNAP_CORNERS] = (n + 63u) / 64u;
-    indirect[I_SNAP_CORNERS + 1u] = 1u;
-    indirect[I_SNAP_CORNERS + 2u] = 1u;
+    let a = list_args(min(counters[C_CORNERS], P.capacity));
+    indirect[I_SNAP_CORNERS] = a.x;
+    indirect[I_SNAP_CORNERS + 1u] = a.y;
+    indirect[I_SNAP_CORNERS + 2u] = a.z;
 }
 
 fn harris_at(l: u32, x: u32, y: u32) -> f32 {

@@ -62,14 +62,21 @@ fn download_corners(ctx: &GpuContext, b: &Buffers) -> Vec<GpuKeypoint> {
     bytemuck::cast_slice::<u32, GpuKeypoint>(&words[..n * 12]).to_vec()
 }
 
+/// common.wgsl `list_args`: the workgroups of 64 over a list of n entries,
+/// at most 65535 along x and the rest along y.
+fn list_args(n: usize) -> [u32; 3] {
+    let groups = n.div_ceil(64) as u32;
+    [groups.min(65535), groups.div_ceil(65535), 1]
+}
+
 /// The final keypoints, after checking the counter and every indirect argument.
 fn download_keypoints(ctx: &GpuContext, b: &Buffers, n_corners: usize) -> Vec<GpuKeypoint> {
     let counters = t::download(ctx, &b.counters).unwrap();
     let n = counters[counter::KEYPOINTS] as usize;
     let ind = t::download(ctx, &b.indirect).unwrap();
     let at = |o: u64| &ind[(o / 4) as usize..(o / 4) as usize + 4];
-    assert_eq!(at(indirect::CORNERS)[..3], [n_corners.div_ceil(64) as u32, 1, 1], "corner dispatch args");
-    assert_eq!(at(indirect::KEYPOINTS)[..3], [n.div_ceil(64) as u32, 1, 1], "keypoint dispatch args");
+    assert_eq!(at(indirect::CORNERS)[..3], list_args(n_corners), "corner dispatch args");
+    assert_eq!(at(indirect::KEYPOINTS)[..3], list_args(n), "keypoint dispatch args");
     assert_eq!(at(indirect::DRAW), [4, n as u32, 0, 0], "draw args");
     assert_eq!(
         at(indirect::KEYPOINT_GROUPS)[..3],
@@ -542,6 +549,74 @@ fn response_nms_select_chain_matches_cpu() {
             let got: Vec<[u32; 12]> = download_keypoints(&ctx, &b, n_corners).iter().map(bits).collect();
             assert_eq!(got, want, "{name} cap {cap}");
             assert!(!want.is_empty());
+        }
+    }
+}
+
+/// The args the select and snap passes write for their dispatches over the
+/// corners and keypoints stay within the 65535 workgroups a dimension that
+/// every device allows, and cover the list exactly, whatever its length:
+/// lfast's own devices dispatch them without wgpu's check
+/// (src/gpu/context.rs `own_flags`). Each args entry point runs alone on a
+/// forged count (the capacity forged too, so nothing clamps it).
+#[test]
+fn dispatch_args_stay_within_the_workgroup_limit() {
+    use lfast::gpu::kernel::{Kernel, compile};
+    use lfast::gpu::{select as sel, snap};
+    let Some(ctx) = t::context() else { return };
+    let cfg = Config { n_features: 0, ..Config::default() };
+    let b = Buffers::new(&ctx.device, &cfg, 64, 48).unwrap();
+    let mut p = b.layout.params;
+    p.capacity = u32::MAX;
+    ctx.queue.write_buffer(&b.params, 0, bytemuck::bytes_of(&p));
+    let buffers = [
+        ("P", &b.params),
+        ("corners", &b.corners),
+        ("counters", &b.counters),
+        ("ranks", &b.ranks),
+        ("keypoints", &b.keypoints),
+        ("indirect", &b.indirect),
+        ("buckets", &b.sel_buckets),
+        ("members", &b.sel_members),
+        ("blur_tiles", &b.blur_tiles),
+        ("cand_list", &b.cand_list),
+        ("denoised", &b.denoised),
+        ("resp", &b.resp),
+        ("mask", &b.mask),
+    ];
+    let select_module = compile(&ctx.device, "select", sel::SOURCE);
+    let snap_module = compile(&ctx.device, "snap", snap::SOURCE);
+    // (name, kernel, the args it writes: a byte offset into `indirect`)
+    let kernel = |m: &wgpu::ShaderModule, name: &str, entry: &str, bindings| {
+        Kernel::from_module(&ctx.device, name, m, entry, bindings)
+    };
+    let kernels = [
+        ("select::args", kernel(&select_module, "select::args", "args", sel::BINDINGS), indirect::CORNERS),
+        ("select::finish", kernel(&select_module, "select::finish", "finish", sel::BINDINGS), indirect::KEYPOINTS),
+        ("snap::snap_args", kernel(&snap_module, "snap::snap_args", "snap_args", snap::BINDINGS), indirect::CORNERS),
+    ];
+    let limit = 65535u64;
+    for n in [0u32, 1, 63, 64, 65, 64 * 65535, 64 * 65535 + 1, 5_000_000, 64 * 65535 * 3 + 7, u32::MAX / 64 * 63] {
+        for (name, k, at) in &kernels {
+            // CORNERS = TAKEN = n: select's finish counts the taken corners (no cap)
+            t::upload(&ctx, &b.counters, &[n, 0, n, 0]);
+            t::upload(&ctx, &b.indirect, &[0; 16]);
+            let group = k.bind_from(&ctx.device, &buffers).unwrap();
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                k.dispatch(&mut pass, &group, [1, 1, 1]);
+            }
+            ctx.queue.submit([enc.finish()]);
+            let words = t::download(&ctx, &b.indirect).unwrap();
+            let a = &words[*at as usize / 4..*at as usize / 4 + 3];
+            let (x, y, z) = (a[0] as u64, a[1] as u64, a[2] as u64);
+            let what = format!("{name} at {n}: ({x}, {y}, {z})");
+            assert!(x <= limit && y <= limit && z == 1, "{what}");
+            // list_index (common.wgsl): entry (y' 65535 + x') 64 + lane
+            let (groups, need) = (x * y, (n as u64).div_ceil(64));
+            assert!(groups >= need && (y == 0 || (y - 1) * limit < need), "{what}: covers {groups} groups of 64");
+            assert_eq!(x, need.min(limit), "{what}");
         }
     }
 }
