@@ -173,9 +173,9 @@ fn spare() -> u32 {
 }
 
 // The args over a list of n corners or keypoints, an invocation each and
-// GROUP (= 64) a workgroup: list_args, within the device's workgroup-count
-// limit whatever n (lfast's own device does not have wgpu check indirect
-// args: src/gpu/context.rs).
+// GROUP (= 64) a workgroup: list_args, within the workgroup count a dimension
+// every device allows whatever n (wgpu's check of indirect args would zero
+// a dispatch past it, and a device without the check may do anything).
 fn write_dispatch(at: u32, n: u32) {
     let a = list_args(n);
     indirect[at] = a.x;

@@ -556,9 +556,10 @@ fn response_nms_select_chain_matches_cpu() {
 /// The args the select and snap passes write for their dispatches over the
 /// corners and keypoints stay within the 65535 workgroups a dimension that
 /// every device allows, and cover the list exactly, whatever its length:
-/// lfast's own devices dispatch them without wgpu's check
-/// (src/gpu/context.rs `own_flags`). Each args entry point runs alone on a
-/// forged count (the capacity forged too, so nothing clamps it).
+/// past the limit wgpu's check of indirect args zeroes a dispatch (the frame
+/// would lose its keypoints), and a device without the check may do
+/// anything. Each args entry point runs alone on a forged count (the
+/// capacity forged too, so nothing clamps it).
 #[test]
 fn dispatch_args_stay_within_the_workgroup_limit() {
     use lfast::gpu::kernel::{Kernel, compile};

@@ -112,38 +112,16 @@ pub struct GpuContext {
     owned: bool,
 }
 
-/// Every adapter of lfast's own instance for these options' backends, in the
-/// instance's order: the Vulkan backend created for compute only where that
-/// matters (see [`compute_only_vulkan`]), and wgpu's check of indirect
-/// dispatch args left off (see [`own_flags`]).
-async fn own_adapters(opts: &GpuOptions) -> Vec<wgpu::Adapter> {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.flags = own_flags();
+/// The instance lfast opens its own adapters from: the options' backends,
+/// with the Vulkan backend created for compute only where that matters (see
+/// [`compute_only_vulkan`]).
+fn instance(opts: &GpuOptions) -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
     desc.backends = opts.backends();
-    if let Some(all) = compute_only_vulkan(&desc) {
-        return all;
+    if let Some(inst) = compute_only_vulkan(&desc) {
+        return inst;
     }
-    let backends = desc.backends;
-    wgpu::Instance::new(desc).enumerate_adapters(backends).await
-}
-
-/// The instance flags of lfast's own devices: wgpu's defaults for this build
-/// less `VALIDATION_INDIRECT_CALL`, then the `WGPU_*` environment variables
-/// (`WGPU_VALIDATION_INDIRECT_CALL=1` turns the check back on).
-///
-/// With the flag, wgpu-core records before every indirect dispatch a
-/// dispatch of its own that checks the args against the device's limits
-/// (zeroing them past a limit), and rebinds lfast's pipeline and bind groups
-/// after it. A frame has 13 indirect dispatches, and every args writer
-/// (`list_args` in shaders/common.wgsl and its callers) keeps each count
-/// within the 65535 that every device supports, whatever the list's length,
-/// so the check could never change a dispatch: on lavapipe it cost ~3.5% of
-/// the whole run (docs/gpu.md). An embedder's device keeps the flags its
-/// instance was made with.
-fn own_flags() -> wgpu::InstanceFlags {
-    let mut flags = wgpu::InstanceFlags::from_build_config();
-    flags.remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
-    flags.with_env()
+    wgpu::Instance::new(desc)
 }
 
 /// The window-system surface extensions that wgpu enables on a Unix
@@ -152,9 +130,9 @@ fn own_flags() -> wgpu::InstanceFlags {
 const WINDOW_SYSTEM_EXTENSIONS: [&std::ffi::CStr; 3] =
     [c"VK_KHR_wayland_surface", c"VK_KHR_xcb_surface", c"VK_KHR_xlib_surface"];
 
-/// The adapters of a Vulkan-only instance without the window-system surface
-/// extensions, when Vulkan is the only backend asked for on a Unix desktop
-/// (Linux, the BSDs), else `None`.
+/// A Vulkan-only instance without the window-system surface extensions, when
+/// Vulkan is the only backend asked for on a Unix desktop (Linux, the BSDs),
+/// else `None`.
 ///
 /// Why: wgpu enables `VK_KHR_wayland_surface` (and xcb, xlib) on every
 /// instance. Mesa's implicit device-selection layer
@@ -173,25 +151,12 @@ const WINDOW_SYSTEM_EXTENSIONS: [&std::ffi::CStr; 3] =
 /// to nobody. `tests/first_run.rs`, python/tests/test_first_run.py and the C
 /// and C++ tests check stderr with `XDG_RUNTIME_DIR` unset.
 ///
-/// The Vulkan instance is wgpu-hal's, made with `init_with_callback`; its
-/// adapters reach wgpu through a wgpu-core instance that holds no backend
-/// and only `desc.flags` (`wgpu::Instance::from_core`), because wgpu-core 30
-/// gives an instance made with `wgpu::Instance::from_hal` its default flags
-/// whatever the descriptor said, and the device takes its flags from the
-/// wgpu-core instance (see [`own_flags`]). wgpu-core consults that instance
-/// for surfaces, for enumerating and requesting adapters, and for the flags
-/// at device creation, nothing else: an adapter it wraps
-/// (`create_adapter_from_hal`) keeps its own reference to the Vulkan
-/// instance, which lives as long as the adapter and any device opened on it.
-/// The adapters are filtered as wgpu-core filters its own (its alignment
-/// check; the rest of its filters apply to flags lfast does not set).
-///
 /// Other backend sets (GL, asked for with `WGPU_BACKEND`) take wgpu's
-/// instance, as does a Vulkan loader that fails here (wgpu then reports no
-/// Vulkan adapter, as it would).
+/// instance unchanged, as does a Vulkan loader that fails here (wgpu then
+/// reports no Vulkan adapter, as it would).
 #[cfg(all(unix, not(target_vendor = "apple"), not(target_os = "android")))]
-fn compute_only_vulkan(desc: &wgpu::InstanceDescriptor) -> Option<Vec<wgpu::Adapter>> {
-    use wgpu::hal::{self, Instance as _};
+fn compute_only_vulkan(desc: &wgpu::InstanceDescriptor) -> Option<wgpu::Instance> {
+    use wgpu::hal;
     // the backends a Unix desktop build of wgpu has: Vulkan alone, or with GL
     if desc.backends & (wgpu::Backends::VULKAN | wgpu::Backends::GL) != wgpu::Backends::VULKAN {
         return None;
@@ -210,39 +175,19 @@ fn compute_only_vulkan(desc: &wgpu::InstanceDescriptor) -> Option<Vec<wgpu::Adap
     // SAFETY: `hal_desc` is a valid descriptor without a display handle. The
     // callback only removes the window-system surface extensions, which no
     // code path of this instance uses (see above): lfast creates no surface.
-    let hal_instance =
-        match unsafe { hal::vulkan::Instance::init_with_callback(&hal_desc, Some(leave_out_window_systems)) } {
-            Ok(inst) => inst,
-            Err(e) => {
-                log::debug!("compute-only Vulkan instance: {e}; using wgpu's own");
-                return None;
-            }
-        };
-    let mut core = wgpu::wgc::instance::Instance::default();
-    core.flags = desc.flags;
-    // SAFETY: a wgpu-core instance with no backend and no display; wgpu
-    // creates nothing on it but the adapters below.
-    let instance = unsafe { wgpu::Instance::from_core(core) };
-    // SAFETY: no surface hint; the hal instance outlives the call.
-    let exposed = unsafe { hal_instance.enumerate_adapters(None) };
-    let all = exposed
-        .into_iter()
-        .filter(|a| {
-            // wgpu-core's `adapter_allowed`: alignments must be powers of two
-            let l = &a.capabilities.limits;
-            l.min_uniform_buffer_offset_alignment.is_power_of_two()
-                && l.min_storage_buffer_offset_alignment.is_power_of_two()
-        })
-        // SAFETY: wgpu-core's instance is consulted for its flags only when a
-        // device is opened on these adapters (see above); each adapter keeps
-        // the Vulkan instance alive itself.
-        .map(|a| unsafe { instance.create_adapter_from_hal(a) })
-        .collect();
-    Some(all)
+    let hal_instance = unsafe { hal::vulkan::Instance::init_with_callback(&hal_desc, Some(leave_out_window_systems)) };
+    match hal_instance {
+        // SAFETY: a Vulkan instance of this build's wgpu-hal, given to wgpu whole.
+        Ok(inst) => Some(unsafe { wgpu::Instance::from_hal::<hal::api::Vulkan>(inst) }),
+        Err(e) => {
+            log::debug!("compute-only Vulkan instance: {e}; using wgpu's own");
+            None
+        }
+    }
 }
 
 #[cfg(not(all(unix, not(target_vendor = "apple"), not(target_os = "android"))))]
-fn compute_only_vulkan(_: &wgpu::InstanceDescriptor) -> Option<Vec<wgpu::Adapter>> {
+fn compute_only_vulkan(_: &wgpu::InstanceDescriptor) -> Option<wgpu::Instance> {
     None
 }
 
@@ -267,34 +212,6 @@ fn auto_index(infos: &[wgpu::AdapterInfo], opts: &GpuOptions) -> std::result::Re
         .min_by_key(|&i| rank(&infos[i], power))
         .map(|i| (i, false))
         .ok_or_else(|| no_hardware_reason(infos))
-}
-
-/// The limits lfast asks of its own devices: the adapter's own (large frames
-/// need large storage buffers), with buffers and storage bindings kept under
-/// 4 GiB as wgpu's indirect-args check keeps them on the devices that have it
-/// (lfast's word indices are `u32`).
-fn own_limits(mut l: wgpu::Limits) -> wgpu::Limits {
-    l.max_buffer_size = l.max_buffer_size.min(u32::MAX as u64);
-    l.max_storage_buffer_binding_size = l.max_storage_buffer_binding_size.min(u32::MAX as u64 & !3);
-    l
-}
-
-/// The adapter an explicit GPU request without a name takes among `infos`:
-/// the first by wgpu's `request_adapter` order for the power preference
-/// (discrete, integrated, other, virtual, then software for high performance;
-/// integrated first for low power; ties keep the enumeration order), else why
-/// none.
-fn preferred_index(infos: &[wgpu::AdapterInfo], power: wgpu::PowerPreference) -> std::result::Result<usize, String> {
-    use wgpu::DeviceType::*;
-    let order = |t: wgpu::DeviceType| match (t, power) {
-        (_, wgpu::PowerPreference::None) => 0,
-        (IntegratedGpu, wgpu::PowerPreference::LowPower) | (DiscreteGpu, wgpu::PowerPreference::HighPerformance) => 1,
-        (DiscreteGpu | IntegratedGpu, _) => 2,
-        (Other, _) => 3,
-        (VirtualGpu, _) => 4,
-        (Cpu, _) => 5,
-    };
-    (0..infos.len()).min_by_key(|&i| order(infos[i].device_type)).ok_or_else(|| "no adapter found".into())
 }
 
 /// Takes adapter `i` of `all` (an index into its infos).
@@ -327,7 +244,7 @@ pub fn auto_choice(opts: &GpuOptions) -> AutoChoice {
 
 /// Every adapter the options' backends expose (for `lfast info`).
 pub fn list_adapters(opts: &GpuOptions) -> Vec<wgpu::AdapterInfo> {
-    pollster::block_on(own_adapters(opts)).iter().map(|a| a.get_info()).collect()
+    pollster::block_on(instance(opts).enumerate_adapters(opts.backends())).iter().map(|a| a.get_info()).collect()
 }
 
 impl GpuContext {
@@ -337,20 +254,24 @@ impl GpuContext {
     }
 
     /// Opens the adapter the options (or the environment) select: the named
-    /// one, else the first for the power preference in wgpu's order
-    /// ([`preferred_index`]), which may be a
+    /// one, else wgpu's choice for the power preference, which may be a
     /// software adapter. This is the explicit request (`Backend::Gpu`); see
     /// [`new_auto`](Self::new_auto) for `Backend::Auto`.
     pub async fn new_async(opts: &GpuOptions) -> Result<Self> {
         super::kernel::parse_shaders_in_background();
-        let all = own_adapters(opts).await;
-        let infos: Vec<_> = all.iter().map(|a| a.get_info()).collect();
-        let i = match opts.name() {
-            Some(name) => index_named(&infos, &name),
-            None => preferred_index(&infos, opts.power()),
-        }
-        .map_err(|reason| Error::NoAdapter { reason })?;
-        let adapter = take(all, i)?;
+        let inst = instance(opts);
+        let adapter = match opts.name() {
+            Some(name) => {
+                let all = inst.enumerate_adapters(opts.backends()).await;
+                let infos: Vec<_> = all.iter().map(|a| a.get_info()).collect();
+                let i = index_named(&infos, &name).map_err(|reason| Error::NoAdapter { reason })?;
+                take(all, i)?
+            }
+            None => inst
+                .request_adapter(&wgpu::RequestAdapterOptions { power_preference: opts.power(), ..Default::default() })
+                .await
+                .map_err(|e| Error::NoAdapter { reason: e.to_string() })?,
+        };
         Self::open(adapter).await
     }
 
@@ -361,7 +282,8 @@ impl GpuContext {
     pub fn new_auto(opts: &GpuOptions) -> Result<Self> {
         super::kernel::parse_shaders_in_background();
         pollster::block_on(async {
-            let all = own_adapters(opts).await;
+            let inst = instance(opts);
+            let all = inst.enumerate_adapters(opts.backends()).await;
             let infos: Vec<_> = all.iter().map(|a| a.get_info()).collect();
             let (i, _) = auto_index(&infos, opts).map_err(|reason| Error::NoAdapter { reason })?;
             Self::open(take(all, i)?).await
@@ -376,7 +298,8 @@ impl GpuContext {
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("lfast"),
                 required_features: features,
-                required_limits: own_limits(adapter.limits()),
+                // The adapter's own limits: large frames need large storage buffers.
+                required_limits: adapter.limits(),
                 ..Default::default()
             })
             .await
@@ -488,41 +411,4 @@ pub(crate) fn map_blocking(ctx: &GpuContext, staging: &wgpu::Buffer, len: u64) -
     let out = slice.get_mapped_range().map_err(|e| Error::Gpu { reason: format!("mapped range: {e:?}") })?.to_vec();
     staging.unmap();
     Ok(out)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use wgpu::DeviceType::*;
-
-    fn info(name: &str, device_type: wgpu::DeviceType) -> wgpu::AdapterInfo {
-        wgpu::AdapterInfo { name: name.into(), ..wgpu::AdapterInfo::new(device_type, wgpu::Backend::Vulkan) }
-    }
-
-    #[test]
-    fn an_unnamed_request_takes_wgpus_order() {
-        use wgpu::PowerPreference::*;
-        let all =
-            [info("cpu", Cpu), info("virtual", VirtualGpu), info("igpu", IntegratedGpu), info("dgpu", DiscreteGpu)];
-        assert_eq!(preferred_index(&all, HighPerformance), Ok(3));
-        assert_eq!(preferred_index(&all, LowPower), Ok(2));
-        assert_eq!(preferred_index(&all, None), Ok(0), "no preference: the enumeration order");
-        let soft = [info("other", Other), info("cpu", Cpu), info("other 2", Other)];
-        assert_eq!(preferred_index(&soft, HighPerformance), Ok(0), "ties keep the enumeration order");
-        assert_eq!(preferred_index(&soft[1..2], LowPower), Ok(0), "a software adapter when it is the only one");
-        assert!(preferred_index(&[], HighPerformance).is_err());
-    }
-
-    #[test]
-    fn own_devices_leave_the_indirect_check_off_and_buffers_under_4_gib() {
-        if std::env::var_os("WGPU_VALIDATION_INDIRECT_CALL").is_none() {
-            assert!(!own_flags().contains(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL));
-        }
-        let big =
-            wgpu::Limits { max_buffer_size: 1 << 40, max_storage_buffer_binding_size: 1 << 40, ..Default::default() };
-        let l = own_limits(big);
-        assert_eq!((l.max_buffer_size, l.max_storage_buffer_binding_size), (u32::MAX as u64, (u32::MAX - 3) as u64));
-        let small = wgpu::Limits::downlevel_defaults();
-        assert_eq!(own_limits(small.clone()), small);
-    }
 }
