@@ -55,7 +55,8 @@ macro_rules! stages {
             /// Compiles every stage's pipelines, each stage on its own scoped
             /// thread: shader translation and the driver's compile take most
             /// of a detector's start (~145 ms of lavapipe's ~180), and stages
-            /// are independent. Each thread builds inside its own error
+            /// are independent; no more build at once than there are cores
+            /// ([`Permits`]). Each thread builds inside its own error
             /// scopes ([`checked`]); a shader that does not compile or a
             /// pipeline that fails validation is an [`Error::Gpu`] naming
             /// every stage that failed.
@@ -68,8 +69,10 @@ macro_rules! stages {
             /// other stages still build, not one after another in the first
             /// frame.
             pub(crate) fn new(device: &wgpu::Device, warm: Option<(&wgpu::Queue, &Buffers)>) -> Result<Self> {
+                let cores = Permits::new(std::thread::available_parallelism().map_or(1, |n| n.get()));
                 std::thread::scope(|s| {
                     $(let $m = s.spawn(|| checked(device, stringify!($m), || {
+                        let _core = cores.take();
                         let built = <super::$m::$ty as Pass>::new(device);
                         if let Some((queue, b)) = warm {
                             warm_up_stage(&built, device, queue, b);
@@ -165,6 +168,43 @@ stages! {
     orientation: OrientationPass,
     orb: OrbPass;
     standalone: matcher, gradient, nms, histogram, cand_list,
+}
+
+/// A counting semaphore: at most `n` holders of a [`Permit`] at a time. The
+/// stage builders take one each, so no more build at once than there are
+/// cores: with all seventeen building at once, two cores started lavapipe's
+/// detector more slowly (one KITTI file through the CLI ~12-17 ms longer of
+/// ~250; docs/gpu.md).
+struct Permits {
+    free: std::sync::Mutex<usize>,
+    freed: std::sync::Condvar,
+}
+
+/// A held permit of [`Permits`], given back when dropped.
+struct Permit<'a>(&'a Permits);
+
+impl Permits {
+    fn new(n: usize) -> Self {
+        Self { free: std::sync::Mutex::new(n.max(1)), freed: std::sync::Condvar::new() }
+    }
+
+    /// Waits for a free permit and takes it. (A panic elsewhere while the
+    /// lock was held leaves the count as it was: the lock's poison is ignored.)
+    fn take(&self) -> Permit<'_> {
+        let mut free = self.free.lock().unwrap_or_else(|e| e.into_inner());
+        while *free == 0 {
+            free = self.freed.wait(free).unwrap_or_else(|e| e.into_inner());
+        }
+        *free -= 1;
+        Permit(self)
+    }
+}
+
+impl Drop for Permit<'_> {
+    fn drop(&mut self) {
+        *self.0.free.lock().unwrap_or_else(|e| e.into_inner()) += 1;
+        self.0.freed.notify_one();
+    }
 }
 
 /// Runs `build` (one stage's shader and pipeline creation) inside error
