@@ -155,6 +155,16 @@ impl Detector {
         self.cpu.config()
     }
 
+    /// Whether frames run on a software adapter (lavapipe, WARP,
+    /// SwiftShader: [`is_software`](crate::gpu::is_software)), whose "GPU"
+    /// is this CPU's own cores.
+    pub(crate) fn on_software_gpu(&self) -> bool {
+        #[cfg(feature = "gpu")]
+        return self.active_gpu().is_some_and(|g| crate::gpu::is_software(&g.det.context().info));
+        #[cfg(not(feature = "gpu"))]
+        false
+    }
+
     pub(crate) fn active_gpu(&self) -> Option<&Gpu> {
         self.gpu.as_ref().filter(|_| !self.fell_back.load(std::sync::atomic::Ordering::Relaxed))
     }

@@ -144,6 +144,11 @@ impl Features {
         }
     }
 
+    /// Whether frames run on a software adapter ([`Detector::on_software_gpu`]).
+    pub(crate) fn on_software_gpu(&self) -> bool {
+        matches!(self, Features::Lfast(d) if d.on_software_gpu())
+    }
+
     /// [`detect_and_compute`](Self::detect_and_compute) with `img` handed to
     /// L-FAST's CPU path as the pyramid's level 0 instead of copied
     /// ([`Detector::detect_and_compute_in`]); handed back unchanged.

@@ -170,7 +170,7 @@ mod gpu {
             let ws = gpu.ws.lock().ok()?;
             // Detector::stream says why one on a software adapter
             let depth = match in_flight {
-                0 if crate::gpu::is_software(&gpu.det.context().info) => 1,
+                0 if det.on_software_gpu() => 1,
                 0 => usize::MAX,
                 n => n,
             };

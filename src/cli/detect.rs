@@ -273,6 +273,8 @@ fn run_with(a: DetectArgs, write: Write, release: fn(Features)) -> Result<bool, 
     // second decoder fills the other core with the next frame meanwhile (four
     // 3840x2160 JPEGs, `--jobs 2`: median 1.10 -> 1.00 s; 51 KITTI PNGs the same).
     let decoders = (threads / 2).clamp(2.min(threads), 4);
+    // on a software adapter the decoders take only the cores its threads leave ([`yield_cores`])
+    let yielding = det.on_software_gpu();
     let next = AtomicUsize::new(0);
     // set when the disk is full: no file is taken after it
     let stop = AtomicBool::new(false);
@@ -289,6 +291,9 @@ fn run_with(a: DetectArgs, write: Write, release: fn(Features)) -> Result<bool, 
         for _ in 0..decoders {
             let tx = tx_dec.clone();
             s.spawn(move || {
+                if yielding {
+                    yield_cores();
+                }
                 let mut loader = crate::image::GrayLoader::default();
                 loop {
                     if report::interrupted() || stop.load(Ordering::Relaxed) {
@@ -429,6 +434,29 @@ fn run_with(a: DetectArgs, write: Write, release: fn(Features)) -> Result<bool, 
     Ok(ok)
 }
 
+/// Lets the calling thread run only on cores nothing else wants (Linux
+/// `SCHED_IDLE`, this thread alone; elsewhere nothing changes): the decoders
+/// beside a software adapter. lavapipe splits each dispatch's workgroups
+/// evenly between its threads up front, so a decoder that takes a core from
+/// one of them holds up the whole dispatch while the other waits; at idle
+/// priority the decoders run in the gaps between dispatches and while one
+/// thread of a dispatch waits (51 KITTI frames on two cores: the run's idle
+/// core time 0.56 -> 0.35 s, its wall time ~3% shorter; docs/gpu.md). They
+/// stay a few frames ahead (the channel's), and when they fall behind the GPU
+/// waits for them and the cores are theirs. Whether it took effect.
+fn yield_cores() -> bool {
+    #[cfg(target_os = "linux")]
+    let took = {
+        let param = libc::sched_param { sched_priority: 0 };
+        // SAFETY: pid 0 is the calling thread (Linux schedules each thread on
+        // its own); `param` is a valid sched_param for the call's duration.
+        unsafe { libc::sched_setscheduler(0, libc::SCHED_IDLE, &param) == 0 }
+    };
+    #[cfg(not(target_os = "linux"))]
+    let took = false;
+    took
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -455,6 +483,28 @@ mod tests {
             .collect();
         v.sort();
         v
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn yield_cores_sets_the_calling_thread_alone_to_idle() {
+        // SAFETY (each call): sched_getscheduler(0) only reads the calling thread's policy
+        let before = unsafe { libc::sched_getscheduler(0) };
+        let inside = std::thread::spawn(|| (yield_cores(), unsafe { libc::sched_getscheduler(0) })).join().unwrap();
+        assert_eq!(inside, (true, libc::SCHED_IDLE));
+        assert_eq!(unsafe { libc::sched_getscheduler(0) }, before);
+    }
+
+    #[test]
+    fn decoders_yield_to_a_software_gpu_only() {
+        let cpu =
+            Features::Lfast(Box::new(crate::Detector::new(crate::Config::default(), crate::Backend::Cpu).unwrap()));
+        assert!(!cpu.on_software_gpu());
+        let Some(ctx) = crate::testing::context() else { return };
+        let software = crate::gpu::is_software(&ctx.info);
+        let gpu = Features::Lfast(Box::new(crate::Detector::from_context(ctx, crate::Config::default()).unwrap()));
+        assert_eq!(gpu.on_software_gpu(), software);
+        assert_eq!(gpu.backend_name(), "gpu");
     }
 
     #[test]
