@@ -8,8 +8,10 @@
 // counters[CANDS], and the indirect args over it (entry `cand_args`), which
 // response.wgsl and corner_nms.wgsl dispatch over. (cand_list.wgsl builds the
 // same list from a `cand` plane: the tests' staged reference.)
-// A column pass, all levels in one dispatch (over the tile list); the test
-// itself runs on the workgroup's compacted edge pixels (see main).
+// A column pass, all levels in one dispatch (over the tile list), then the
+// test: in Paper mode as bit planes, a quad's 16 rows at once (entry `paper`,
+// mirroring src/cpu/lfast/scan.rs's row words); in Branch mode, whose branches
+// need per-pixel work, one invocation per listed edge pixel (`args`, `main`).
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/lfast.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
 // Races: windows stores the edge_bits words (tile_word) of its quad's four
@@ -18,7 +20,9 @@
 // workgroup reserved (one atomicAdd on counters[EDGES] by lane 0, lanes' offsets
 // from an atomicAdd on the workgroup's count); main sets candidate bits with
 // atomicOr (several pixels share a word of `cand`) and takes its cand_list slot
-// with atomicAdd; the args entry points are single invocations.
+// with atomicAdd; paper stores the `cand` words of its quad's four columns and
+// 16 rows (no other invocation has a pixel in them) and takes its cand_list
+// slots with one atomicAdd; the args entry points are single invocations.
 
 // Four columns' words a load (a quad walk's x0 .. x0 + 3: common.wgsl pk_pitch).
 @group(0) @binding(1) var<storage, read> edges: array<vec4<u32>>;
@@ -30,8 +34,10 @@
 @group(0) @binding(7) var<storage, read_write> cand_list: array<u32>;
 @group(0) @binding(8) var<storage, read_write> indirect: array<u32>;
 // `edge_bits` again, four columns' words a store (a quad walk's x0 .. x0 + 3:
-// common.wgsl tile_word), for `windows`
+// common.wgsl tile_word), for `windows`, and a load, for `paper`
 @group(0) @binding(9) var<storage, read_write> edge_bits4: array<vec4<u32>>;
+// `cand` again, four columns' words a store (common.wgsl pk_word), for `paper`
+@group(0) @binding(10) var<storage, read_write> cand4: array<vec4<u32>>;
 
 // indirect::EDGES / 4 and indirect::CANDS / 4 in src/gpu/buffers.rs.
 const I_EDGES: u32 = 20u;
@@ -184,6 +190,9 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
     let span = quad_span(wg, li);
     var rows = vec2<u32>(0u);
     if (span.y < span.z) { rows = walk_windows(span); }
+    // Paper mode: `paper` tests the windows' words, no list (P is uniform,
+    // so the barriers below are reached by all or none)
+    if (P.mode == 0u) { return; }
     // The tested rows' list entries, reserved once per workgroup: an atomic
     // per entry on the one counter (tens of thousands a KITTI frame, its
     // cache line bouncing between the cores) cost lavapipe ~0.2 ms more.
@@ -291,4 +300,218 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: 
 @compute @workgroup_size(1, 1, 1)
 fn cand_args() {
     write_list_args(C_CANDS, I_CANDS);
+}
+
+// Paper mode (entry `paper`, in place of `args` and `main`): the test as bit
+// planes. Circle point t supports p when it is an edge pixel and q = 2t - p is
+// an edge pixel or has at least `support` edge neighbours (SUP(q), a property
+// of q alone); p is a corner when at least two circle points support it,
+// unless its circle holds exactly two edge pixels and they are opposite (then
+// both supporting is the only way to two). No per-pixel control flow: one
+// invocation tests the 16 rows of its quad's four columns at once, a bit per
+// row (bit r: row y0 + r), vec4 = the four columns. It loads the edge windows
+// (windows: bit j = row y0 - 8 + j) of columns x0 - 8 .. x0 + 11, five aligned
+// quads; computes SUP of columns x0 - 6 .. x0 + 9 from a bit-sliced count of
+// each row's eight neighbours; and takes the circle's points as shifts of
+// those words. The CPU counts the same way along rows (src/cpu/lfast/scan.rs).
+// Columns outside the level (quads clamped into it) feed only untested
+// pixels' bits: a tested pixel's reads stay within 7 of it (border >= 7).
+
+// Columns p .. p + 3 of the twenty columns of `q` (p constant once inlined).
+fn window4(q: array<vec4<u32>, 5>, p: u32) -> vec4<u32> {
+    let a = q[p / 4u];
+    let b = q[min(p / 4u + 1u, 4u)];
+    let s = p % 4u;
+    let s1 = vec4<u32>(a.y, a.z, a.w, b.x);
+    let s2 = vec4<u32>(a.z, a.w, b.x, b.y);
+    let s3 = vec4<u32>(a.w, b.x, b.y, b.z);
+    return select(select(select(a, s1, s == 1u), s2, s == 2u), s3, s == 3u);
+}
+
+// A bit-sliced count 0..8: bit j of each plane, of row j's count.
+struct Count8 {
+    b0: vec4<u32>,
+    b1: vec4<u32>,
+    b2: vec4<u32>,
+    b3: vec4<u32>,
+}
+
+// The count of eight bit planes, by full and half adders.
+fn count8(x1: vec4<u32>, x2: vec4<u32>, x3: vec4<u32>, x4: vec4<u32>, x5: vec4<u32>, x6: vec4<u32>, x7: vec4<u32>, x8: vec4<u32>) -> Count8 {
+    let s1 = x1 ^ x2 ^ x3;
+    let k1 = (x1 & x2) | (x3 & (x1 ^ x2));
+    let s2 = x4 ^ x5 ^ x6;
+    let k2 = (x4 & x5) | (x6 & (x4 ^ x5));
+    let s3 = s1 ^ s2 ^ x7;
+    let k3 = (s1 & s2) | (x7 & (s1 ^ s2));
+    let k4 = s3 & x8;
+    // twos: k1 + k2 + k3 + k4 = b1 + 2 (m1 + m2); fours: m1 + m2 = b2 + 2 b3
+    let t1 = k1 ^ k2 ^ k3;
+    let m1 = (k1 & k2) | (k3 & (k1 ^ k2));
+    let m2 = t1 & k4;
+    return Count8(s3 ^ x8, t1 ^ k4, m1 ^ m2, m1 & m2);
+}
+
+// One bit of the comparison of a count with k, from the top: `gt` the rows
+// whose higher bits already exceed k's, `eq` those equal so far.
+fn ge_bit(gt: ptr<function, vec4<u32>>, eq: ptr<function, vec4<u32>>, c: vec4<u32>, kb: u32) {
+    let m = vec4<u32>(select(0u, 0xffffffffu, kb == 1u));
+    *gt |= *eq & c & ~m;
+    *eq &= ~(c ^ m);
+}
+
+// Rows whose count is at least k (uniform).
+fn at_least(n: Count8, k: u32) -> vec4<u32> {
+    var gt = vec4<u32>(0u);
+    var eq = vec4<u32>(0xffffffffu);
+    ge_bit(&gt, &eq, n.b3, (k >> 3u) & 1u);
+    ge_bit(&gt, &eq, n.b2, (k >> 2u) & 1u);
+    ge_bit(&gt, &eq, n.b1, (k >> 1u) & 1u);
+    ge_bit(&gt, &eq, n.b0, k & 1u);
+    return gt | eq;
+}
+
+// SUP of the four columns at p .. p + 3 of the windows `q` (same rows):
+// edge, or at least `support` of the eight neighbours edge.
+fn sup4(q: array<vec4<u32>, 5>, p: u32) -> vec4<u32> {
+    let lft = window4(q, p - 1u);
+    let c = window4(q, p);
+    let r = window4(q, p + 1u);
+    let one = vec4<u32>(1u);
+    // bit j of `x << 1` is row j - 1's, of `x >> 1` row j + 1's
+    let n = count8(lft << one, lft, lft >> one, c << one, c >> one, r << one, r, r >> one);
+    return c | at_least(n, P.support);
+}
+
+// Running counts over the circle's points, bit per row.
+struct Circle {
+    e1: vec4<u32>,  // at least one circle edge pixel
+    e2: vec4<u32>,  // at least two
+    e3: vec4<u32>,  // at least three
+    s1: vec4<u32>,  // at least one supporting point
+    s2: vec4<u32>,  // at least two
+    opp: vec4<u32>, // an opposite pair of circle edge pixels
+}
+
+// Circle points t and t + 8 (opposite) added to the counts: `q` the edge
+// windows of columns x0 - 8 .., `s` SUP of columns x0 - 6 ...
+fn add_pair(c: ptr<function, Circle>, q: array<vec4<u32>, 5>, s: array<vec4<u32>, 5>, t: u32) {
+    let ea = window4(q, u32(8 + circle_dx(t))) >> vec4<u32>(u32(8 + circle_dy(t)));
+    let eb = window4(q, u32(8 + circle_dx(t + 8u))) >> vec4<u32>(u32(8 + circle_dy(t + 8u)));
+    let xa = ea & (window4(s, u32(6 + 2 * circle_dx(t))) >> vec4<u32>(u32(8 + 2 * circle_dy(t))));
+    let xb = eb & (window4(s, u32(6 + 2 * circle_dx(t + 8u))) >> vec4<u32>(u32(8 + 2 * circle_dy(t + 8u))));
+    (*c).opp |= ea & eb;
+    (*c).e3 |= (*c).e2 & ea;
+    (*c).e2 |= (*c).e1 & ea;
+    (*c).e1 |= ea;
+    (*c).e3 |= (*c).e2 & eb;
+    (*c).e2 |= (*c).e1 & eb;
+    (*c).e1 |= eb;
+    (*c).s2 |= (*c).s1 & xa;
+    (*c).s1 |= xa;
+    (*c).s2 |= (*c).s1 & xb;
+    (*c).s1 |= xb;
+}
+
+// `bits` (rows of a column from atlas index i0, a row every w) without the
+// rows the mask is off at.
+fn unmasked(bits: u32, i0: u32, w: u32) -> u32 {
+    var m = bits;
+    var out = bits;
+    while (m != 0u) {
+        let r = countTrailingZeros(m);
+        m &= m - 1u;
+        out = select(out & ~(1u << r), out, mask[i0 + r * w] != 0u);
+    }
+    return out;
+}
+
+// The rows of `bits` as atlas indices (from i0, a row every w) at
+// cand_list[at ..]; the next free entry.
+fn append_rows(bits: u32, i0: u32, w: u32, at: u32) -> u32 {
+    var m = bits;
+    var a = at;
+    while (m != 0u) {
+        let r = countTrailingZeros(m);
+        m &= m - 1u;
+        cand_list[a] = i0 + r * w;
+        a++;
+    }
+    return a;
+}
+
+// The `cand` words of rows y0 + 4 g .. y0 + 4 g + 3 of the four columns
+// (bits 4 g .. 4 g + 3 of each), stored where any is set: `cand` is zeroed
+// before the pass and no other invocation has a pixel in them.
+fn store_cand(l: u32, x0: u32, y0: u32, c: vec4<u32>, g: u32) {
+    let q = (c >> vec4<u32>(4u * g)) & vec4<u32>(15u);
+    if (any(q != vec4<u32>(0u))) {
+        cand4[pk_word(l, x0, y0 + 4u * g) >> 2u] = vec4<u32>(pk_from_bits(q.x), pk_from_bits(q.y), pk_from_bits(q.z), pk_from_bits(q.w));
+    }
+}
+
+// Entry `paper` (Paper mode), a quad pass after `windows` (common.wgsl
+// quad_span): the corners among the quad's tested pixels, their bytes of
+// `cand` set and their atlas indices appended to `cand_list`.
+@compute @workgroup_size(64, 1, 1)
+fn paper(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
+    let span = quad_span(wg, li);
+    if (span.y == span.z) { return; }
+    let l = span.w;
+    let w = lw(l);
+    let h = lh(l);
+    let x0 = span.x;
+    let y0 = span.y;
+    // the tested rows and columns, as in walk_windows
+    let b = max(P.border, 7u);
+    let lo = u32(clamp(i32(b) - i32(y0), 0, 16));
+    let hi = u32(clamp(i32(h) - i32(b) - i32(y0), 0, 16));
+    let tested = select(0u, ((1u << hi) - 1u) & ~((1u << lo) - 1u), hi > lo);
+    let x = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
+    let rows = select(vec4<u32>(0u), vec4<u32>(tested), (x >= vec4<u32>(b)) & (x + vec4<u32>(b) < vec4<u32>(w)));
+    // the edge windows of columns x0 - 8 .. x0 + 11 (quads clamped into the level)
+    let row0 = tile_word(l, 0u, y0 / TILE) >> 2u;
+    let qx = i32(x0 >> 2u);
+    let last = i32((w - 1u) >> 2u);
+    var q: array<vec4<u32>, 5>;
+    q[2] = edge_bits4[row0 + u32(qx)];
+    // the tested edge pixels; none in most quads
+    let p = (q[2] >> vec4<u32>(8u)) & rows;
+    if (all(p == vec4<u32>(0u))) { return; }
+    q[0] = edge_bits4[row0 + u32(max(qx - 2, 0))];
+    q[1] = edge_bits4[row0 + u32(max(qx - 1, 0))];
+    q[3] = edge_bits4[row0 + u32(min(qx + 1, last))];
+    q[4] = edge_bits4[row0 + u32(min(qx + 2, last))];
+    // SUP of columns x0 - 6 .. x0 + 9 (positions 2 .. 17 of q)
+    var s: array<vec4<u32>, 5>;
+    s[0] = sup4(q, 2u);
+    s[1] = sup4(q, 6u);
+    s[2] = sup4(q, 10u);
+    s[3] = sup4(q, 14u);
+    var c: Circle;
+    add_pair(&c, q, s, 0u);
+    add_pair(&c, q, s, 1u);
+    add_pair(&c, q, s, 2u);
+    add_pair(&c, q, s, 3u);
+    add_pair(&c, q, s, 4u);
+    add_pair(&c, q, s, 5u);
+    add_pair(&c, q, s, 6u);
+    add_pair(&c, q, s, 7u);
+    var corner = p & c.s2 & ~(c.e2 & ~c.e3 & c.opp);
+    if (all(corner == vec4<u32>(0u))) { return; }
+    let i0 = loff(l) + y0 * w + x0;
+    if (P.use_mask != 0u) {
+        corner = vec4<u32>(unmasked(corner.x, i0, w), unmasked(corner.y, i0 + 1u, w), unmasked(corner.z, i0 + 2u, w), unmasked(corner.w, i0 + 3u, w));
+    }
+    let n = countOneBits(corner.x) + countOneBits(corner.y) + countOneBits(corner.z) + countOneBits(corner.w);
+    if (n == 0u) { return; }
+    var at = atomicAdd(&counters[C_CANDS], n);
+    at = append_rows(corner.x, i0, w, at);
+    at = append_rows(corner.y, i0 + 1u, w, at);
+    at = append_rows(corner.z, i0 + 2u, w, at);
+    at = append_rows(corner.w, i0 + 3u, w, at);
+    store_cand(l, x0, y0, corner, 0u);
+    store_cand(l, x0, y0, corner, 1u);
+    store_cand(l, x0, y0, corner, 2u);
+    store_cand(l, x0, y0, corner, 3u);
 }

@@ -4,12 +4,16 @@
 //! `counters[counter::CANDS]` and the args `indirect::CANDS` that
 //! [`ResponsePass`](super::response::ResponsePass) and
 //! [`CornerNmsPass`](super::corner_nms::CornerNmsPass) dispatch over), all
-//! levels at once, in four dispatches: `windows` (each tile column's edges and
-//! 8 rows either side as the bits of a word, `edge_bits`, and the tested edge
-//! pixels appended to `edge_list`), `args` (the indirect args over that list),
-//! `main` (the test, one invocation per listed pixel, a load per column of its
-//! stencil; a corner sets its `cand` byte and appends itself to `cand_list`),
-//! then `cand_args`.
+//! levels at once: `windows` (each tile column's edges and 8 rows either side
+//! as the bits of a word, `edge_bits`), then the test, then `cand_args`. In
+//! Paper mode the test is `paper`, a quad pass: the 16 rows of four columns at
+//! once as bit planes (SUP of the columns around from a bit-sliced count of
+//! the neighbours, the circle's points as shifts), the corners' `cand` words
+//! stored and their indices appended to `cand_list`. In Branch mode `windows`
+//! also appends the tested edge pixels to `edge_list`, `args` writes the
+//! indirect args over it, and `main` tests one listed pixel per invocation (a
+//! load per column of its stencil; a corner sets its `cand` byte and appends
+//! itself to `cand_list`).
 
 use super::buffers::{Buffers, counter, indirect};
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
@@ -30,6 +34,7 @@ pub const BINDINGS: &[Binding] = &[
     b(7, "cand_list", Slot::ReadWrite),
     b(8, "indirect", Slot::ReadWrite),
     b(9, "edge_bits4", Slot::ReadWrite),
+    b(10, "cand4", Slot::ReadWrite),
 ];
 
 /// The bindings of `main`, which is dispatched indirectly: all but
@@ -37,20 +42,22 @@ pub const BINDINGS: &[Binding] = &[
 /// bound as storage while it is the dispatch's indirect buffer).
 const TEST_BINDINGS: &[Binding] = BINDINGS.split_at(8).0;
 
-/// [`LfastPass`]'s bind groups: `windows`, `args` and `cand_args` (with
-/// `indirect`), `main`.
+/// [`LfastPass`]'s bind groups: `windows`, `args`, `paper` and `cand_args`
+/// (with `indirect`), `main`.
 #[derive(Debug)]
 pub struct LfastBound {
     lists: wgpu::BindGroup,
     test: wgpu::BindGroup,
 }
 
-/// The L-FAST candidate pass: `windows`, `args`, `main`, then `cand_args`.
+/// The L-FAST candidate pass: `windows`, then `paper` (Paper mode) or `args`
+/// and `main` (Branch mode), then `cand_args`.
 #[derive(Debug)]
 pub struct LfastPass {
     windows: Kernel,
     args: Kernel,
     test: Kernel,
+    paper: Kernel,
     cand_args: Kernel,
 }
 
@@ -64,6 +71,7 @@ impl Pass for LfastPass {
             windows: Kernel::from_module(device, "lfast windows", &module, "windows", BINDINGS),
             args: Kernel::from_module(device, "lfast args", &module, "args", BINDINGS),
             test: Kernel::from_module(device, "lfast main", &module, "main", TEST_BINDINGS),
+            paper: Kernel::from_module(device, "lfast paper", &module, "paper", BINDINGS),
             cand_args: Kernel::from_module(device, "lfast cand_args", &module, "cand_args", BINDINGS),
         }
     }
@@ -80,16 +88,22 @@ impl Pass for LfastPass {
             ("cand_list", &b.cand_list),
             ("indirect", &b.indirect),
             ("edge_bits4", &b.edge_bits),
+            ("cand4", &b.cand),
         ];
-        // `windows`, `args` and `cand_args` have the same layout entries: one group serves all three.
+        // `windows`, `args`, `paper` and `cand_args` have the same layout entries: one group serves all four.
         Ok(LfastBound { lists: self.windows.bind(device, &buffers)?, test: self.test.bind_from(device, &buffers)? })
     }
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &LfastBound, b: &Buffers) {
         // wgpu orders the dispatches of one compute pass (each sees the one before).
         self.windows.dispatch(pass, &bound.lists, b.layout.quad_groups());
-        self.args.dispatch(pass, &bound.lists, [1, 1, 1]);
-        self.test.dispatch_indirect(pass, &bound.test, &b.indirect, indirect::EDGES);
+        if b.layout.params.mode == 0 {
+            // Paper mode: the quads' pixels as bit planes, no list
+            self.paper.dispatch(pass, &bound.lists, b.layout.quad_groups());
+        } else {
+            self.args.dispatch(pass, &bound.lists, [1, 1, 1]);
+            self.test.dispatch_indirect(pass, &bound.test, &b.indirect, indirect::EDGES);
+        }
         self.cand_args.dispatch(pass, &bound.lists, [1, 1, 1]);
     }
 
