@@ -28,7 +28,8 @@
 //   compress     per vertical run of a walk: labels[top] = root of the top,
 //                and bit `root` of flags set if the run holds a STRONG pixel
 //                (`flags` is cleared by the pass's prepare)
-//   final_edges  a run is edge (255) iff bit labels[top] of flags is set
+//   final_edges  a run is edge (255) iff bit labels[top] of flags is set;
+//                the walk's edge rows also as tile-column words (edge_tiles)
 // No host loop and no iteration cap: the result is exact after one pass of
 // each, whatever the length or shape of a contour. Through the complement,
 // atomicMin of a parent is atomicMax of its stored word.
@@ -62,7 +63,8 @@
 // (atomicMin, atomicStore, atomicOr: the union-find above, whose roots
 // come out the same in any interleaving);
 // walk_args, a single invocation, stores `indirect` and pads `walks`;
-// final_edges stores the `edges` words of its walk's four columns, padding
+// final_edges stores its walk's four `edge_tiles` words and the `edges` words
+// of its walk's four columns, padding
 // past the level's width included (4 whole words per column of a tile,
 // common.wgsl pk_word), and walks are distinct
 // entries, so no two invocations write one word.
@@ -81,6 +83,11 @@
 @group(0) @binding(5) var<storage, read_write> walks: array<u32>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> indirect: array<u32>;
+// The edge rows of each tile column (`edge_bits`, common.wgsl tile_word:
+// bit r = row 16 ty + r is an edge), four columns a store: Paper mode's
+// L-FAST test reads them (lfast.wgsl `paper`; cleared by the pass's prepare,
+// so the walks not listed hold none).
+@group(0) @binding(9) var<storage, read_write> edge_tiles: array<vec4<u32>>;
 
 // indirect::WALKS / 4 in src/gpu/buffers.rs.
 const I_WALKS: u32 = 24u;
@@ -418,6 +425,7 @@ fn final_edges(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_i
     let row0 = loff(l) + c.y * w + x0;
     let e01 = edge_pair(m[0].x, m[1].x, row0, w);
     let e23 = edge_pair(m[2].x, m[3].x, row0 + 2u, w);
+    edge_tiles[tile_word(l, x0, c.y / TILE) >> 2u] = vec4<u32>(e01 & 0xffffu, e01 >> 16u, e23 & 0xffffu, e23 >> 16u);
     // `edges` is column-packed as `ruled`: bit r of column k's edge rows ->
     // 255 at row c.y + r. The walk's words in a loop (see median.wgsl).
     // (columns past the level's width have no edge rows: their padding words 0)

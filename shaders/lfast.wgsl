@@ -8,10 +8,14 @@
 // counters[CANDS], and the indirect args over it (entry `cand_args`), which
 // response.wgsl and corner_nms.wgsl dispatch over. (cand_list.wgsl builds the
 // same list from a `cand` plane: the tests' staged reference.)
-// A column pass, all levels in one dispatch (over the tile list), then the
-// test: in Paper mode as bit planes, a quad's 16 rows at once (entry `paper`,
-// mirroring src/cpu/lfast/scan.rs's row words); in Branch mode, whose branches
-// need per-pixel work, one invocation per listed edge pixel (`args`, `main`).
+// All levels in one dispatch each (over the tile list). In Paper mode the
+// test runs as bit planes, a quad's 16 rows at once (entry `paper`, mirroring
+// src/cpu/lfast/scan.rs's row words), on the edge rows of each tile column
+// that hysteresis.wgsl's final_edges stores in `edge_bits`
+// (gpu::layout::pack_edge_tiles); `edges` is not read. In Branch mode, whose
+// branches need per-pixel work, `windows` (a column pass) makes the edge
+// windows and list from `edges`, and `args` and `main` test one listed edge
+// pixel per invocation.
 // Tests: tests/gpu_edges_back.rs (this pass alone == src/cpu/lfast.rs) and tests/gpu_end_to_end.rs (whole pipeline); tests/gpu_shaders.rs (naga, bindings).
 //
 // Races: windows stores the edge_bits words (tile_word) of its quad's four
@@ -33,8 +37,9 @@
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> cand_list: array<u32>;
 @group(0) @binding(8) var<storage, read_write> indirect: array<u32>;
-// `edge_bits` again, four columns' words a store (a quad walk's x0 .. x0 + 3:
-// common.wgsl tile_word), for `windows`, and a load, for `paper`
+// `edge_bits` again, four columns' words a store or load (a quad walk's x0 ..
+// x0 + 3: common.wgsl tile_word): `windows` stores its windows (Branch mode);
+// `paper` loads the tile words hysteresis stored there (Paper mode)
 @group(0) @binding(9) var<storage, read_write> edge_bits4: array<vec4<u32>>;
 // `cand` again, four columns' words a store (common.wgsl pk_word), for `paper`
 @group(0) @binding(10) var<storage, read_write> cand4: array<vec4<u32>>;
@@ -190,9 +195,6 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
     let span = quad_span(wg, li);
     var rows = vec2<u32>(0u);
     if (span.y < span.z) { rows = walk_windows(span); }
-    // Paper mode: `paper` tests the windows' words, no list (P is uniform,
-    // so the barriers below are reached by all or none)
-    if (P.mode == 0u) { return; }
     // The tested rows' list entries, reserved once per workgroup: an atomic
     // per entry on the one counter (tens of thousands a KITTI frame, its
     // cache line bouncing between the cores) cost lavapipe ~0.2 ms more.
@@ -302,20 +304,30 @@ fn cand_args() {
     write_list_args(C_CANDS, I_CANDS);
 }
 
-// Paper mode (entry `paper`, in place of `args` and `main`): the test as bit
+// Paper mode (entry `paper`, in place of `windows`, `args` and `main`): the test as bit
 // planes. Circle point t supports p when it is an edge pixel and q = 2t - p is
 // an edge pixel or has at least `support` edge neighbours (SUP(q), a property
 // of q alone); p is a corner when at least two circle points support it,
 // unless its circle holds exactly two edge pixels and they are opposite (then
 // both supporting is the only way to two). No per-pixel control flow: one
 // invocation tests the 16 rows of its quad's four columns at once, a bit per
-// row (bit r: row y0 + r), vec4 = the four columns. It loads the edge windows
-// (windows: bit j = row y0 - 8 + j) of columns x0 - 8 .. x0 + 11, five aligned
-// quads; computes SUP of columns x0 - 6 .. x0 + 9 from a bit-sliced count of
+// row (bit r: row y0 + r), vec4 = the four columns. It makes the edge windows
+// (as `windows`: bit j = row y0 - 8 + j) of columns x0 - 8 .. x0 + 11 from
+// hysteresis' tile words of three tile rows, five aligned quads each;
+// computes SUP of columns x0 - 6 .. x0 + 9 from a bit-sliced count of
 // each row's eight neighbours; and takes the circle's points as shifts of
 // those words. The CPU counts the same way along rows (src/cpu/lfast/scan.rs).
 // Columns outside the level (quads clamped into it) feed only untested
 // pixels' bits: a tested pixel's reads stay within 7 of it (border >= 7).
+
+// The edge windows (bit j = row y0 - 8 + j, as `windows` makes them) of the
+// four columns of quad k of a tile row, from the edge_tiles words of that
+// tile row (mid) and the ones above and below (none past the level).
+fn window_quad(above: u32, mid: u32, below: u32, up: bool, down: bool, k: u32) -> vec4<u32> {
+    let a = select(vec4<u32>(0u), edge_bits4[above + k], up);
+    let b = select(vec4<u32>(0u), edge_bits4[below + k], down);
+    return (a >> vec4<u32>(8u)) | (edge_bits4[mid + k] << vec4<u32>(8u)) | (b << vec4<u32>(24u));
+}
 
 // Columns p .. p + 3 of the twenty columns of `q` (p constant once inlined).
 fn window4(q: array<vec4<u32>, 5>, p: u32) -> vec4<u32> {
@@ -450,8 +462,8 @@ fn store_cand(l: u32, x0: u32, y0: u32, c: vec4<u32>, g: u32) {
     }
 }
 
-// Entry `paper` (Paper mode), a quad pass after `windows` (common.wgsl
-// quad_span): the corners among the quad's tested pixels, their bytes of
+// Entry `paper` (Paper mode), a quad pass (common.wgsl quad_span) after
+// hysteresis: the corners among the quad's tested pixels, their bytes of
 // `cand` set and their atlas indices appended to `cand_list`.
 @compute @workgroup_size(64, 1, 1)
 fn paper(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li: vec3<u32>) {
@@ -469,19 +481,26 @@ fn paper(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     let tested = select(0u, ((1u << hi) - 1u) & ~((1u << lo) - 1u), hi > lo);
     let x = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
     let rows = select(vec4<u32>(0u), vec4<u32>(tested), (x >= vec4<u32>(b)) & (x + vec4<u32>(b) < vec4<u32>(w)));
-    // the edge windows of columns x0 - 8 .. x0 + 11 (quads clamped into the level)
-    let row0 = tile_word(l, 0u, y0 / TILE) >> 2u;
-    let qx = i32(x0 >> 2u);
-    let last = i32((w - 1u) >> 2u);
-    var q: array<vec4<u32>, 5>;
-    q[2] = edge_bits4[row0 + u32(qx)];
-    // the tested edge pixels; none in most quads
-    let p = (q[2] >> vec4<u32>(8u)) & rows;
+    // the tested edge pixels (this tile row's edge rows, hysteresis'
+    // edge_tiles words); none in most quads
+    let ty = y0 / TILE;
+    let mid = tile_word(l, 0u, ty) >> 2u;
+    let qx = x0 >> 2u;
+    let p = edge_bits4[mid + qx] & rows;
     if (all(p == vec4<u32>(0u))) { return; }
-    q[0] = edge_bits4[row0 + u32(max(qx - 2, 0))];
-    q[1] = edge_bits4[row0 + u32(max(qx - 1, 0))];
-    q[3] = edge_bits4[row0 + u32(min(qx + 1, last))];
-    q[4] = edge_bits4[row0 + u32(min(qx + 2, last))];
+    // the edge windows of columns x0 - 8 .. x0 + 11 (quads clamped into the
+    // level), rows y0 - 8 .. y0 + 23 from the tile rows above and below
+    let above = tile_word(l, 0u, max(ty, 1u) - 1u) >> 2u;
+    let below = tile_word(l, 0u, min(ty + 1u, (h - 1u) / TILE)) >> 2u;
+    let up = ty > 0u;
+    let down = (ty + 1u) * TILE < h;
+    let last = (w - 1u) >> 2u;
+    var q: array<vec4<u32>, 5>;
+    q[0] = window_quad(above, mid, below, up, down, max(qx, 2u) - 2u);
+    q[1] = window_quad(above, mid, below, up, down, max(qx, 1u) - 1u);
+    q[2] = window_quad(above, mid, below, up, down, qx);
+    q[3] = window_quad(above, mid, below, up, down, min(qx + 1u, last));
+    q[4] = window_quad(above, mid, below, up, down, min(qx + 2u, last));
     // SUP of columns x0 - 6 .. x0 + 9 (positions 2 .. 17 of q)
     var s: array<vec4<u32>, 5>;
     s[0] = sup4(q, 2u);

@@ -61,6 +61,18 @@ pub fn upload_ruled(ctx: &GpuContext, b: &Buffers, l: usize, p: &Plane<u8>) {
     }
 }
 
+/// Writes edge map `p` (255 = edge) into level `l` of `edge_bits` as
+/// hysteresis leaves it for Paper mode's L-FAST test
+/// ([`pack_edge_tiles`](crate::gpu::layout::pack_edge_tiles)).
+pub fn upload_edge_tiles(ctx: &GpuContext, b: &Buffers, l: usize, p: &Plane<u8>) {
+    let r = b.layout.tile_range(l);
+    let words = crate::gpu::layout::pack_edge_tiles(p.width, p.height, &p.data);
+    assert_eq!(words.len(), r.len(), "level {l} size");
+    if !words.is_empty() {
+        ctx.queue.write_buffer(&b.edge_bits, r.start as u64 * 4, bytemuck::cast_slice(&words));
+    }
+}
+
 /// Writes the walk list of the ruled classes `planes` (one per level,
 /// [`walk_list`](crate::gpu::layout::walk_list)) and its count, as `rules`
 /// leaves them for hysteresis; in reverse raster order, since `rules`

@@ -130,9 +130,18 @@ fn check_hysteresis(ctx: &GpuContext, pass: &HysteresisPass, b: &Buffers, planes
         t::upload_ruled(ctx, b, l, p);
     }
     t::upload_walks(ctx, b, planes);
+    poison(ctx, &b.edge_bits, u32::MAX);
     t::run(ctx, pass, b).unwrap();
+    let tiles = t::download(ctx, &b.edge_bits).unwrap();
     for (l, p) in planes.iter().enumerate() {
-        let want = to_u32(&hysteresis(p));
+        let edges = hysteresis(p);
+        // Paper mode: each tile column's edge rows for L-FAST, every word
+        // written or cleared
+        if b.layout.params.mode == 0 {
+            let want = lfast::gpu::layout::pack_edge_tiles(p.width, p.height, &edges.data);
+            assert_eq!(tiles[b.layout.tile_range(l)], want[..], "{what} level {l}: edge_bits");
+        }
+        let want = to_u32(&edges);
         let got = t::download_packed(ctx, b, &b.edges, l).unwrap();
         if got != want {
             let bad = got.iter().zip(&want).position(|(g, w)| g != w).unwrap_or(0);
@@ -186,7 +195,9 @@ fn check_lfast(
     poison(ctx, &b.edge_bits, u32::MAX);
     poison(ctx, &b.mask, 0);
     for (l, e) in edges.iter().enumerate() {
+        // Branch mode reads `edges`, Paper mode the tile words hysteresis leaves
         t::upload_packed(ctx, b, &b.edges, l, e);
+        t::upload_edge_tiles(ctx, b, l, e);
         if let Some(m) = masks {
             t::upload_plane(ctx, b, &b.mask, l, &m[l]);
         }

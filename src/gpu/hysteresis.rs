@@ -1,5 +1,7 @@
 //! SPEC 7 rule 3 (hysteresis) on the GPU: shaders/hysteresis.wgsl, mirroring
-//! src/cpu/hysteresis.rs. `ruled` -> `edges` (255 / 0), all levels at once, by
+//! src/cpu/hysteresis.rs. `ruled` -> `edges` (255 / 0) and, in Paper mode,
+//! `edge_bits` (each tile column's edge rows as the bits of a word, what
+//! Paper mode's L-FAST test reads: [`pack_edge_tiles`](super::layout::pack_edge_tiles)), all levels at once, by
 //! union-find connected-component labelling in three dispatches (merge,
 //! compress (with the STRONG flags), final_edges) after clearing the labels
 //! and flags: exact after a fixed number of dispatches, with no read-back and
@@ -23,6 +25,7 @@ pub const BINDINGS: &[Binding] = &[
     b(6, "counters", Slot::ReadWrite),
     b(7, "indirect", Slot::ReadWrite),
     b(8, "ruled4", Slot::Read),
+    b(9, "edge_tiles", Slot::ReadWrite),
 ];
 /// `walk_args`'s: it writes the args the three steps are dispatched by, so
 /// those must not bind `indirect` (a buffer is either indirect args or
@@ -30,7 +33,7 @@ pub const BINDINGS: &[Binding] = &[
 const ARGS_BINDINGS: &[Binding] = &[PARAMS, BINDINGS[5], BINDINGS[6], BINDINGS[7]];
 /// The three steps'.
 const STEP_BINDINGS: &[Binding] =
-    &[BINDINGS[0], BINDINGS[1], BINDINGS[2], BINDINGS[3], BINDINGS[4], BINDINGS[5], BINDINGS[8]];
+    &[BINDINGS[0], BINDINGS[1], BINDINGS[2], BINDINGS[3], BINDINGS[4], BINDINGS[5], BINDINGS[8], BINDINGS[9]];
 
 /// The entry points in dispatch order, with their bindings: the walk list's
 /// dispatch args, then the three steps over the list.
@@ -78,6 +81,7 @@ impl Pass for HysteresisPass {
             ("walks", &b.walks),
             ("counters", &b.counters),
             ("indirect", &b.indirect),
+            ("edge_tiles", &b.edge_bits),
         ];
         let groups = self.kernels.iter().map(|k| k.bind_from(device, &buffers)).collect::<Result<Vec<_>>>()?;
         Ok(HysteresisBound { groups })
@@ -101,5 +105,10 @@ impl Pass for HysteresisPass {
         encoder.clear_buffer(&b.flags, 0, None);
         // final_edges writes the listed walks only: the others stay 0
         encoder.clear_buffer(&b.edges, 0, None);
+        // and their tile words for Paper mode's L-FAST test (in Branch mode
+        // lfast's `windows` writes `edge_bits` whole)
+        if b.layout.params.mode == 0 {
+            encoder.clear_buffer(&b.edge_bits, 0, None);
+        }
     }
 }

@@ -528,6 +528,34 @@ pub fn pack_ruled(w: u32, h: u32, v: &[u8]) -> Vec<u32> {
     words
 }
 
+/// An edge map of a `w x h` level (255 = edge, row-major) as hysteresis'
+/// `final_edges` leaves it in `edge_bits` for Paper mode's L-FAST test
+/// (shaders/hysteresis.wgsl, shaders/lfast.wgsl `paper`): per 16x16 tile in
+/// row-major order, one word per column, bit r = row 16 ty + r is an edge;
+/// columns and rows past the level clear.
+///
+/// ```
+/// use lfast::gpu::layout::pack_edge_tiles;
+/// // 17 x 17: four tiles; edges at (1, 2) and (16, 16)
+/// let mut e = vec![0u8; 17 * 17];
+/// e[2 * 17 + 1] = 255;
+/// e[16 * 17 + 16] = 255;
+/// let words = pack_edge_tiles(17, 17, &e);
+/// assert_eq!(words.len(), 4 * 16);
+/// assert_eq!(words[1], 1 << 2); // tile 0, column 1
+/// assert_eq!(words[3 * 16], 1); // tile 3, its column 0 (x = 16), row 16
+/// assert_eq!(words.iter().filter(|&&w| w != 0).count(), 2);
+/// ```
+pub fn pack_edge_tiles(w: u32, h: u32, v: &[u8]) -> Vec<u32> {
+    let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+    let mut words = vec![0u32; (tx * ty * TILE) as usize];
+    for (i, &e) in v.iter().enumerate().take((w * h) as usize) {
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        words[tile_word(tx, x, y)] |= u32::from(e == 255) << (y % TILE);
+    }
+    words
+}
+
 /// A quad walk (four columns x0 .. x0 + 3 from row y0 = 16 ty, up to 16 rows)
 /// of level `l` as an entry of the walk list: `l | (x0 / 4) << 5 | (y0 / 16)
 /// << 17` (common.wgsl `walk_entry`; sides are at most 16384, levels 32).

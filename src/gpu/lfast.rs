@@ -4,16 +4,18 @@
 //! `counters[counter::CANDS]` and the args `indirect::CANDS` that
 //! [`ResponsePass`](super::response::ResponsePass) and
 //! [`CornerNmsPass`](super::corner_nms::CornerNmsPass) dispatch over), all
-//! levels at once: `windows` (each tile column's edges and 8 rows either side
-//! as the bits of a word, `edge_bits`), then the test, then `cand_args`. In
-//! Paper mode the test is `paper`, a quad pass: the 16 rows of four columns at
-//! once as bit planes (SUP of the columns around from a bit-sliced count of
-//! the neighbours, the circle's points as shifts), the corners' `cand` words
-//! stored and their indices appended to `cand_list`. In Branch mode `windows`
-//! also appends the tested edge pixels to `edge_list`, `args` writes the
-//! indirect args over it, and `main` tests one listed pixel per invocation (a
-//! load per column of its stencil; a corner sets its `cand` byte and appends
-//! itself to `cand_list`).
+//! levels at once, then `cand_args`. In Paper mode the test is `paper`, a
+//! quad pass on the edge rows of each tile column that hysteresis' final_edges
+//! stores in `edge_bits` ([`pack_edge_tiles`](super::layout::pack_edge_tiles)):
+//! the 16 rows of four columns at once as bit planes (SUP of the columns
+//! around from a bit-sliced count of the neighbours, the circle's points as
+//! shifts), the corners' `cand` words stored and their indices appended to
+//! `cand_list`. In Branch mode `windows` makes each tile column's edges and 8
+//! rows either side the bits of a word in `edge_bits` from `edges` and
+//! appends the tested edge pixels to `edge_list`, `args` writes the indirect
+//! args over it, and `main` tests one listed pixel per invocation (a load per
+//! column of its stencil; a corner sets its `cand` byte and appends itself to
+//! `cand_list`).
 
 use super::buffers::{Buffers, counter, indirect};
 use super::kernel::{Binding, Kernel, PARAMS, Slot, b};
@@ -50,8 +52,8 @@ pub struct LfastBound {
     test: wgpu::BindGroup,
 }
 
-/// The L-FAST candidate pass: `windows`, then `paper` (Paper mode) or `args`
-/// and `main` (Branch mode), then `cand_args`.
+/// The L-FAST candidate pass: `paper` (Paper mode) or `windows`, `args` and
+/// `main` (Branch mode), then `cand_args`.
 #[derive(Debug)]
 pub struct LfastPass {
     windows: Kernel,
@@ -96,11 +98,11 @@ impl Pass for LfastPass {
 
     fn record(&self, pass: &mut wgpu::ComputePass<'_>, bound: &LfastBound, b: &Buffers) {
         // wgpu orders the dispatches of one compute pass (each sees the one before).
-        self.windows.dispatch(pass, &bound.lists, b.layout.quad_groups());
         if b.layout.params.mode == 0 {
-            // Paper mode: the quads' pixels as bit planes, no list
+            // Paper mode: the quads' pixels as bit planes, on hysteresis' tile words
             self.paper.dispatch(pass, &bound.lists, b.layout.quad_groups());
         } else {
+            self.windows.dispatch(pass, &bound.lists, b.layout.quad_groups());
             self.args.dispatch(pass, &bound.lists, [1, 1, 1]);
             self.test.dispatch_indirect(pass, &bound.test, &b.indirect, indirect::EDGES);
         }
