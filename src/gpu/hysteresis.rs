@@ -1,7 +1,8 @@
 //! SPEC 7 rule 3 (hysteresis) on the GPU: shaders/hysteresis.wgsl, mirroring
 //! src/cpu/hysteresis.rs. `ruled` -> `edges` (255 / 0) and, in Paper mode,
 //! `edge_bits` (each tile column's edge rows as the bits of a word, what
-//! Paper mode's L-FAST test reads: [`pack_edge_tiles`](super::layout::pack_edge_tiles)), all levels at once, by
+//! Paper mode's L-FAST test reads:
+//! [`pack_edge_tiles`](super::layout::pack_edge_tiles)), all levels at once, by
 //! union-find connected-component labelling in three dispatches (merge,
 //! compress (with the STRONG flags), final_edges) after clearing the labels
 //! and flags: exact after a fixed number of dispatches, with no read-back and
