@@ -227,21 +227,27 @@ fn windows(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l
 var<workgroup> wg_edges: atomic<u32>;
 var<workgroup> wg_base: u32;
 
+// The rows of the quad walk `span` (quad_span) that are tested, per column
+// (bit r: row y0 + r): rows b .. h - b - 1 of columns b .. w - b - 1 (a level
+// with w or h <= 2 * border has none; written so nothing underflows).
+fn tested_rows(span: vec4<u32>) -> vec4<u32> {
+    let w = lw(span.w);
+    let h = lh(span.w);
+    let b = max(P.border, 7u);
+    let lo = u32(clamp(i32(b) - i32(span.y), 0, 16));
+    let hi = u32(clamp(i32(h) - i32(b) - i32(span.y), 0, 16));
+    let tested = select(0u, ((1u << hi) - 1u) & ~((1u << lo) - 1u), hi > lo);
+    let x = vec4<u32>(span.x) + vec4<u32>(0u, 1u, 2u, 3u);
+    return select(vec4<u32>(0u), vec4<u32>(tested), (x >= vec4<u32>(b)) & (x + vec4<u32>(b) < vec4<u32>(w)));
+}
+
 // The edge windows of the quad walk `span` (quad_span), stored; its tested
 // edge rows as bits 16 k + r (row r of column x0 + k) for columns x0, x0 + 1
 // (.x) and x0 + 2, x0 + 3 (.y).
 fn walk_windows(span: vec4<u32>) -> vec2<u32> {
     let l = span.w;
-    let w = lw(l);
     let h = lh(l);
     let x0 = span.x;
-    // The tested rows: b .. h - b - 1 of columns b .. w - b - 1 (a level
-    // with w or h <= 2 * border has none; written so nothing underflows),
-    // here rows y0 + r with r in [lo, hi).
-    let b = max(P.border, 7u);
-    let lo = u32(clamp(i32(b) - i32(span.y), 0, 16));
-    let hi = u32(clamp(i32(h) - i32(b) - i32(span.y), 0, 16));
-    let tested = select(0u, ((1u << hi) - 1u) & ~((1u << lo) - 1u), hi > lo);
     // rows y0 - 8 .. y0 + 23 of the four columns: eight groups of four rows
     // (y0, a multiple of 16, is its tile's top row), a load each for all four
     let g = i32(span.y >> 2u) - 2;
@@ -255,10 +261,8 @@ fn walk_windows(span: vec4<u32>) -> vec2<u32> {
     bits |= window_nibbles(l, x0, g, 7, h);
     // the four columns' windows, stored (columns past the level's width are
     // padding words of the tile row, never read), and their tested edge rows
-    // (bit r: row y0 + r; `tested` the rows the level's border leaves)
     edge_bits4[tile_word(l, x0, span.y / TILE) >> 2u] = bits;
-    let x = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
-    let r = select(vec4<u32>(0u), (bits >> vec4<u32>(8u)) & vec4<u32>(tested), (x >= vec4<u32>(b)) & (x + vec4<u32>(b) < vec4<u32>(w)));
+    let r = (bits >> vec4<u32>(8u)) & tested_rows(span);
     return vec2<u32>(r.x | (r.y << 16u), r.z | (r.w << 16u));
 }
 
@@ -474,19 +478,12 @@ fn paper(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) li:
     let h = lh(l);
     let x0 = span.x;
     let y0 = span.y;
-    // the tested rows and columns, as in walk_windows
-    let b = max(P.border, 7u);
-    let lo = u32(clamp(i32(b) - i32(y0), 0, 16));
-    let hi = u32(clamp(i32(h) - i32(b) - i32(y0), 0, 16));
-    let tested = select(0u, ((1u << hi) - 1u) & ~((1u << lo) - 1u), hi > lo);
-    let x = vec4<u32>(x0) + vec4<u32>(0u, 1u, 2u, 3u);
-    let rows = select(vec4<u32>(0u), vec4<u32>(tested), (x >= vec4<u32>(b)) & (x + vec4<u32>(b) < vec4<u32>(w)));
     // the tested edge pixels (this tile row's edge rows, hysteresis'
     // edge_tiles words); none in most quads
     let ty = y0 / TILE;
     let mid = tile_word(l, 0u, ty) >> 2u;
     let qx = x0 >> 2u;
-    let p = edge_bits4[mid + qx] & rows;
+    let p = edge_bits4[mid + qx] & tested_rows(span);
     if (all(p == vec4<u32>(0u))) { return; }
     // the edge windows of columns x0 - 8 .. x0 + 11 (quads clamped into the
     // level), rows y0 - 8 .. y0 + 23 from the tile rows above and below

@@ -53,11 +53,16 @@ pub fn upload_packed(ctx: &GpuContext, b: &Buffers, buf: &wgpu::Buffer, l: usize
 /// Writes SPEC 7's ruled classes (NONE, WEAK, STRONG) into level `l` of the
 /// `ruled` plane ([`pack_ruled`](crate::gpu::layout::pack_ruled)).
 pub fn upload_ruled(ctx: &GpuContext, b: &Buffers, l: usize, p: &Plane<u8>) {
+    upload_tile_words(ctx, b, &b.ruled, l, &crate::gpu::layout::pack_ruled(p.width, p.height, &p.data));
+}
+
+/// Writes `words` (a word per column of every tile of level `l`) into level
+/// `l` of a tile-column plane.
+fn upload_tile_words(ctx: &GpuContext, b: &Buffers, buf: &wgpu::Buffer, l: usize, words: &[u32]) {
     let r = b.layout.tile_range(l);
-    let words = crate::gpu::layout::pack_ruled(p.width, p.height, &p.data);
     assert_eq!(words.len(), r.len(), "level {l} size");
     if !words.is_empty() {
-        ctx.queue.write_buffer(&b.ruled, r.start as u64 * 4, bytemuck::cast_slice(&words));
+        ctx.queue.write_buffer(buf, r.start as u64 * 4, bytemuck::cast_slice(words));
     }
 }
 
@@ -65,12 +70,7 @@ pub fn upload_ruled(ctx: &GpuContext, b: &Buffers, l: usize, p: &Plane<u8>) {
 /// hysteresis leaves it for Paper mode's L-FAST test
 /// ([`pack_edge_tiles`](crate::gpu::layout::pack_edge_tiles)).
 pub fn upload_edge_tiles(ctx: &GpuContext, b: &Buffers, l: usize, p: &Plane<u8>) {
-    let r = b.layout.tile_range(l);
-    let words = crate::gpu::layout::pack_edge_tiles(p.width, p.height, &p.data);
-    assert_eq!(words.len(), r.len(), "level {l} size");
-    if !words.is_empty() {
-        ctx.queue.write_buffer(&b.edge_bits, r.start as u64 * 4, bytemuck::cast_slice(&words));
-    }
+    upload_tile_words(ctx, b, &b.edge_bits, l, &crate::gpu::layout::pack_edge_tiles(p.width, p.height, &p.data));
 }
 
 /// Writes the walk list of the ruled classes `planes` (one per level,
