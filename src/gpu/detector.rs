@@ -406,8 +406,11 @@ impl GpuDetector {
         ws.ring.try_finish(&self.ctx, &self.cfg, t)
     }
 
-    /// [`try_finish_readback`](Self::try_finish_readback) telling an overrun apart.
-    pub(crate) fn finish_frame(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<Finish> {
+    /// [`try_finish_readback`](Self::try_finish_readback) telling an overrun
+    /// apart: with frames in flight, a frame whose keypoints outgrew its
+    /// copy, and whose rest a later frame has overwritten, is
+    /// [`Finish::Overrun`]; run it again (`Detector::stream` does).
+    pub fn finish_frame(&self, ws: &mut GpuWorkspace, t: Ticket) -> Result<Finish> {
         self.ctx.check_lost()?;
         ws.ring.finish(&self.ctx, &self.cfg, t)
     }

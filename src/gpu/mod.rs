@@ -45,7 +45,7 @@ pub use detector::{GpuDetector, GpuDetectorOptions, GpuInput, GpuWorkspace};
 pub use footprint::{WorkspaceReport, workspace_report};
 pub use layout::FrameLayout;
 pub use pass::Pass;
-pub use readback::{Frame, Ticket};
+pub use readback::{Finish, Frame, Ticket};
 pub use stages::{SHADERS, STAGES, time_each_stage};
 
 use kernel::Binding;

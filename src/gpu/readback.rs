@@ -80,8 +80,9 @@ struct Slot {
     frame: u64,
 }
 
-/// What [`Ring::finish`] found.
-pub(crate) enum Finish {
+/// What a frame's readback found ([`GpuDetector::finish_frame`](super::GpuDetector::finish_frame)).
+#[derive(Debug)]
+pub enum Finish {
     /// The frame, complete.
     Done(Frame),
     /// Not mapped yet.
