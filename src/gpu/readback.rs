@@ -174,7 +174,7 @@ impl Ring {
     }
 
     /// Keypoints the next frame copies: every slot without a spill, else the
-    /// largest recent count plus an eighth and 64, in whole [`COPY_STEP`]s.
+    /// largest recent count plus a half and 64, in whole [`COPY_STEP`]s.
     fn want(&self) -> u64 {
         if self.spill.is_none() {
             return self.frame_slots;
@@ -182,7 +182,7 @@ impl Ring {
         let want = match self.recent.iter().max() {
             None if self.hint == 0 => self.frame_slots,
             None => self.hint,
-            Some(&m) => (m + m / 8 + 64).next_multiple_of(COPY_STEP),
+            Some(&m) => (m + m / 2 + 64).next_multiple_of(COPY_STEP),
         };
         want.min(self.frame_slots)
     }
