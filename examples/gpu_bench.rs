@@ -125,20 +125,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Config::default(),
         GpuDetectorOptions { ring, profile: false, ..Default::default() },
     )?;
-    let mut ws = Some(det.workspace(w, h)?);
+    let mut slot = Some(det.workspace(w, h)?);
     for img in imgs.iter().take(3) {
-        det.detect_and_compute(&mut ws, img.view(), None)?;
+        det.detect_and_compute(&mut slot, img.view(), None)?;
     }
     // latency: one frame at a time, upload to host-side results
     let mut lat = Vec::new();
     let mut kps = 0usize;
     for img in &imgs {
         let t = Instant::now();
-        let f = det.detect_and_compute(&mut ws, img.view(), None)?;
+        let f = det.detect_and_compute(&mut slot, img.view(), None)?;
         lat.push(t.elapsed().as_secs_f64() * 1e3);
         kps += f.keypoints.len();
     }
-    let ws = ws.as_mut().ok_or("workspace")?;
+    let ws = slot.as_mut().ok_or("workspace")?;
+    let ring = ws.ring_len();
     // host side of the readback alone: wait until the frame's staging buffer
     // is mapped, then time turning it into a Frame (count, casts, copies of
     // the used part, exact angles, unmap)
@@ -181,22 +182,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // a frame in flight, read back; one whose keypoints outgrew its copy, the
     // rest overwritten by a later frame, once more on its own, as the newest
     // frame (what Detector::stream does); whether it ran again
-    let redeem = |ws: &mut GpuWorkspace,
+    let redeem = |slot: &mut Option<GpuWorkspace>,
                   (tk, index, again): (Ticket, wgpu::SubmissionIndex, &Plane<u8>)|
      -> Result<bool, Box<dyn std::error::Error>> {
         loop {
-            match det.finish_frame(ws, tk)? {
+            match det.finish_frame(slot.as_mut().ok_or("workspace")?, tk)? {
                 Finish::Done(_) => return Ok(false),
                 // wait for this frame's submission only: later ones keep the device busy
                 Finish::Pending => ctx.wait_for(index.clone())?,
                 Finish::Overrun { .. } => {
-                    ws.write_gray(&ctx.queue, again.view())?;
-                    let mut enc = ctx.device.create_command_encoder(&Default::default());
-                    det.encode(&mut enc, GpuInput::Written, ws)?;
-                    let tk = det.encode_readback(&mut enc, ws)?;
-                    ctx.queue.submit([enc.finish()]);
-                    det.start_readback(ws, tk)?;
-                    det.finish_readback(ws, tk)?;
+                    det.detect_and_compute(slot, again.view(), None)?;
                     return Ok(true);
                 }
             }
@@ -204,11 +199,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     for _ in 0..reps {
         for img in &imgs {
-            if pending.len() == ws.ring_len() {
+            if pending.len() == ring {
                 let oldest = pending.pop_front().ok_or("ring")?;
-                redone += usize::from(redeem(ws, oldest)?);
+                redone += usize::from(redeem(&mut slot, oldest)?);
                 done += 1;
             }
+            let ws = slot.as_mut().ok_or("workspace")?;
             ws.write_gray(&ctx.queue, img.view())?;
             let mut enc = ctx.device.create_command_encoder(&Default::default());
             det.encode(&mut enc, GpuInput::Written, ws)?;
@@ -219,7 +215,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     while let Some(oldest) = pending.pop_front() {
-        redone += usize::from(redeem(ws, oldest)?);
+        redone += usize::from(redeem(&mut slot, oldest)?);
         done += 1;
     }
     let secs = t.elapsed().as_secs_f64();
@@ -250,7 +246,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("CPU time to record + submit a frame: {enc_ms:.3} ms (median)");
     println!(
         "sustained, {} in flight: {fps:.1} frames/s ({:.3} ms per frame; {redone} of {done} frames run again: their keypoints outgrew the copy)",
-        ws.ring_len(),
+        ring,
         1e3 / fps
     );
     println!("mean keypoints per frame: {:.1}", kps as f64 / imgs.len() as f64);
